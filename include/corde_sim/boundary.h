@@ -1,0 +1,58 @@
+// Boundary conditions and loads on nodes and segments of a rod.
+#pragma once
+
+#include "corde_sim/energy_terms.h"
+
+namespace corde {
+
+// Prescribed motion of one node. While active the node is kinematic: its position is set, not
+// integrated, and its velocity is the one of the prescribed motion.
+struct NodeDrive {
+  enum class Kind { kFixed, kVelocity, kTarget };
+  Kind kind = Kind::kFixed;
+  int node = 0;
+  Vec3 origin = Vec3::Zero();    // position at t_start (fixed position for kFixed)
+  Vec3 velocity = Vec3::Zero();  // kVelocity: constant velocity (m/s)
+  double t_start = 0.0;
+  Vec3 target = Vec3::Zero();  // kTarget: where the caller wants the node at the end of the step
+};
+
+// Prescribed orientation of one segment (kinematic, like NodeDrive).
+struct SegmentDrive {
+  enum class Kind { kFixed, kSpin, kTarget };
+  Kind kind = Kind::kFixed;
+  int segment = 0;
+  Quat origin = Quat::Identity();  // orientation at t_start
+  double rate = 0.0;               // kSpin: rotation rate about the segment's own tangent (rad/s)
+  double t_start = 0.0;
+  Quat target = Quat::Identity();  // kTarget: orientation at the end of the step
+};
+
+// A force on a node or a torque on a segment, both in the world frame, ramped linearly from zero
+// to `value` over [t_start, t_start + ramp_time] and constant after (ramp_time 0: a step).
+struct Load {
+  enum class Kind { kForce, kTorque };
+  Kind kind = Kind::kForce;
+  int index = 0;
+  Vec3 value = Vec3::Zero();
+  double t_start = 0.0;
+  double ramp_time = 0.0;
+
+  double scale(double t) const {
+    if (t < t_start) return 0.0;
+    if (ramp_time <= 0.0 || t >= t_start + ramp_time) return 1.0;
+    return (t - t_start) / ramp_time;
+  }
+};
+
+// A fixed frame beyond an end of the rod, joined to the end segment by a bending element of half
+// a segment's rest length. With the end node fixed and the end segment free to rotate this is a
+// clamp whose bending acts at the node, which removes most of the O(1/N) bias of freezing the
+// whole end segment (model-notes.md).
+struct GhostFrame {
+  bool active = false;
+  Quat frame = Quat::Identity();
+  Vec3 uhat = Vec3::Zero();  // rest strain of the boundary element
+};
+
+}  // namespace corde

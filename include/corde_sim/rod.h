@@ -1,0 +1,105 @@
+// The discrete CoRdE rod: state, parameters, boundary conditions, forces and one time step.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "corde_sim/boundary.h"
+#include "corde_sim/energy_terms.h"
+#include "corde_sim/material.h"
+
+namespace corde {
+
+struct Energies {
+  double stretch = 0.0, bend_twist = 0.0, coupling = 0.0;  // elastic (J)
+  double kinetic_translation = 0.0, kinetic_rotation = 0.0;
+  double gravity = 0.0;  // potential of gravity, zero at the world origin
+  double elastic() const { return stretch + bend_twist + coupling; }
+  double kinetic() const { return kinetic_translation + kinetic_rotation; }
+};
+
+class Rod {
+ public:
+  // Nodes x (N+1), one orientation per segment (N). Rest lengths are the initial segment
+  // lengths; rest strains are zero (a straight rest shape) until set_rest_strains_from_state().
+  Rod(std::string name, std::vector<Vec3> nodes, std::vector<Quat> frames, const Section& section);
+
+  const std::string& name() const { return name_; }
+  int num_nodes() const { return static_cast<int>(x_.size()); }
+  int num_segments() const { return static_cast<int>(q_.size()); }
+  const Section& section() const { return section_; }
+
+  // State. Orientations are unit quaternions; omega is the body-frame angular velocity.
+  std::vector<Vec3>& positions() { return x_; }
+  const std::vector<Vec3>& positions() const { return x_; }
+  std::vector<Vec3>& velocities() { return v_; }
+  const std::vector<Vec3>& velocities() const { return v_; }
+  std::vector<Quat>& orientations() { return q_; }
+  const std::vector<Quat>& orientations() const { return q_; }
+  std::vector<Vec3>& angular_velocities() { return w_; }
+  const std::vector<Vec3>& angular_velocities() const { return w_; }
+
+  // Parameters.
+  const std::vector<double>& rest_lengths() const { return rest_; }
+  const std::vector<double>& node_masses() const { return mass_; }
+  Vec3 segment_inertia(int s) const { return inertia_[s]; }  // body diagonal (kg m^2)
+  // Rest strains of the N-1 interior orientation elements (intrinsic bending and twist).
+  std::vector<Vec3>& rest_strains() { return uhat_; }
+  const std::vector<Vec3>& rest_strains() const { return uhat_; }
+  void set_rest_strains_from_state();
+  // Changes the section (material or radius); masses and inertia follow.
+  void set_section(const Section& section);
+  // Rest lengths, recomputing masses and inertia.
+  void set_rest_lengths(const std::vector<double>& rest);
+
+  // Boundary conditions and loads. Adding a drive makes the node or segment kinematic.
+  void add_node_drive(const NodeDrive& d);
+  void add_segment_drive(const SegmentDrive& d);
+  bool remove_node_drive(int node);
+  bool remove_segment_drive(int segment);
+  NodeDrive* node_drive(int node);
+  SegmentDrive* segment_drive(int segment);
+  const std::vector<NodeDrive>& node_drives() const { return node_drives_; }
+  const std::vector<SegmentDrive>& segment_drives() const { return segment_drives_; }
+  void add_load(const Load& l) { loads_.push_back(l); }
+  std::vector<Load>& loads() { return loads_; }
+  // Ghost-frame clamps at the start (before segment 0) and end (after the last segment).
+  GhostFrame& ghost_start() { return ghost_[0]; }
+  GhostFrame& ghost_end() { return ghost_[1]; }
+  const GhostFrame& ghost_start() const { return ghost_[0]; }
+  const GhostFrame& ghost_end() const { return ghost_[1]; }
+
+  // Forces and body torques at time t (internal, damping, gravity, loads) into forces()/torques().
+  void compute_forces(double t, const Vec3& gravity);
+  const std::vector<Vec3>& forces() const { return f_; }
+  const std::vector<Vec3>& torques() const { return tau_; }
+
+  // One semi-implicit Euler step (eqs. 37-42) from t to t + h. Allocates nothing.
+  void step(double t, double h, const Vec3& gravity);
+
+  Energies energies(const Vec3& gravity) const;
+  Vec3 center_of_mass() const;
+  Vec3 linear_momentum() const;
+  Vec3 angular_momentum() const;  // about the origin, including the segments' spin
+  bool finite() const;
+  double length() const;  // current centreline length
+
+ private:
+  void update_mass_and_inertia();
+  void apply_drives(double t_end, double h);
+
+  std::string name_;
+  Section section_;
+  std::vector<Vec3> x_, v_, f_;
+  std::vector<Quat> q_;
+  std::vector<Vec3> w_, tau_, w_world_;
+  std::vector<double> rest_, rest_elem_, mass_, inv_mass_;
+  std::vector<Vec3> inertia_, uhat_;
+  std::vector<unsigned char> node_kinematic_, seg_kinematic_;
+  std::vector<NodeDrive> node_drives_;
+  std::vector<SegmentDrive> segment_drives_;
+  std::vector<Load> loads_;
+  GhostFrame ghost_[2];
+};
+
+}  // namespace corde

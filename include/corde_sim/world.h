@@ -1,0 +1,46 @@
+// Several rods sharing gravity and a clock.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "corde_sim/rod.h"
+
+namespace corde {
+
+enum class Integrator { kSemiImplicitEuler };
+
+struct WorldEnergies {
+  Energies total;
+  double elastic() const { return total.elastic(); }
+  double kinetic() const { return total.kinetic(); }
+};
+
+class World {
+ public:
+  Vec3 gravity = Vec3(0.0, 0.0, -9.81);
+  double time_step = 1e-4;  // s
+  Integrator integrator = Integrator::kSemiImplicitEuler;
+
+  std::vector<Rod>& rods() { return rods_; }
+  const std::vector<Rod>& rods() const { return rods_; }
+  Rod& add_rod(Rod rod);
+  // Throws std::out_of_range naming the rod if there is none by that name.
+  Rod& rod(const std::string& name);
+  const Rod& rod(const std::string& name) const;
+
+  double time() const { return time_; }
+  void set_time(double t) { time_ = t; }
+  void step();  // advances every rod by time_step
+  void step(int n) {
+    for (int i = 0; i < n; ++i) step();
+  }
+  bool finite() const;
+  WorldEnergies energies() const;
+
+ private:
+  std::vector<Rod> rods_;
+  double time_ = 0.0;
+};
+
+}  // namespace corde

@@ -1,0 +1,49 @@
+#include "corde_sim/world.h"
+
+#include <stdexcept>
+
+namespace corde {
+
+Rod& World::add_rod(Rod rod) {
+  for (const Rod& r : rods_)
+    if (r.name() == rod.name()) throw std::invalid_argument("duplicate rod name '" + r.name() + "'");
+  rods_.push_back(std::move(rod));
+  return rods_.back();
+}
+
+Rod& World::rod(const std::string& name) {
+  for (Rod& r : rods_)
+    if (r.name() == name) return r;
+  throw std::out_of_range("no rod named '" + name + "'");
+}
+
+const Rod& World::rod(const std::string& name) const {
+  return const_cast<World*>(this)->rod(name);
+}
+
+void World::step() {
+  for (Rod& r : rods_) r.step(time_, time_step, gravity);
+  time_ += time_step;
+}
+
+bool World::finite() const {
+  for (const Rod& r : rods_)
+    if (!r.finite()) return false;
+  return true;
+}
+
+WorldEnergies World::energies() const {
+  WorldEnergies w;
+  for (const Rod& r : rods_) {
+    const Energies e = r.energies(gravity);
+    w.total.stretch += e.stretch;
+    w.total.bend_twist += e.bend_twist;
+    w.total.coupling += e.coupling;
+    w.total.kinetic_translation += e.kinetic_translation;
+    w.total.kinetic_rotation += e.kinetic_rotation;
+    w.total.gravity += e.gravity;
+  }
+  return w;
+}
+
+}  // namespace corde
