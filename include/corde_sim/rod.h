@@ -63,6 +63,7 @@ class Rod {
   const std::vector<SegmentDrive>& segment_drives() const { return segment_drives_; }
   void add_load(const Load& l) { loads_.push_back(l); }
   std::vector<Load>& loads() { return loads_; }
+  const std::vector<Load>& loads() const { return loads_; }
   // Ghost-frame clamps at the start (before segment 0) and end (after the last segment).
   GhostFrame& ghost_start() { return ghost_[0]; }
   GhostFrame& ghost_end() { return ghost_[1]; }
