@@ -12,6 +12,10 @@ namespace corde {
 // gamma_r are copied. Throws std::invalid_argument if the radius is not > 0.
 Material equivalent_material(const Section& section);
 
+// Kelvin-Voigt internal friction with retardation time tau (s): every mode of frequency w gets the
+// damping ratio w tau / 2, i.e. gamma_t = tau E_s pi r^2 and gamma_r = tau E pi r^4 / 4.
+void set_retardation_time(Material* m, double radius, double tau);
+
 // The rod resampled at `elements` segments, with the same section, name and boundary conditions.
 // New nodes sit at equal steps of the material (rest arc-length) coordinate s on the current
 // centreline; positions and velocities are interpolated by a cubic in s through the old nodes,

@@ -93,6 +93,12 @@ Material equivalent_material(const Section& s) {
   return m;
 }
 
+void set_retardation_time(Material* m, double radius, double tau) {
+  const double area = kPi * radius * radius;
+  m->gamma_t = tau * m->stretch_modulus * area;
+  m->gamma_r = tau * m->youngs_modulus * area * radius * radius / 4.0;
+}
+
 Rod resample_rod(const Rod& rod, int elements) {
   if (elements < 1) throw std::invalid_argument("elements must be >= 1");
   const int n_old = rod.num_segments();

@@ -51,6 +51,17 @@ TEST(EquivalentMaterial, RoundTripsTheSection) {
   EXPECT_NEAR(big.bend / s.bend, 16.0, 1e-9);
 }
 
+// The retardation time gives the friction that a section's own stiffness times tau would:
+// gamma_t = tau K_s, gamma_r = tau B.
+TEST(EquivalentMaterial, RetardationTimeScalesWithStiffness) {
+  const Section s = test_section();
+  Material m = equivalent_material(s);
+  set_retardation_time(&m, s.radius, 0.01);
+  const Section t = make_section(m, s.radius);
+  EXPECT_NEAR(t.gamma_t, 0.01 * s.stretch, 1e-12 * s.stretch);
+  EXPECT_NEAR(t.gamma_r, 0.01 * s.bend, 1e-12 * s.bend);
+}
+
 TEST(EquivalentMaterial, RejectsZeroRadius) {
   Section s = test_section();
   s.radius = 0.0;
