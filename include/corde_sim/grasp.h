@@ -1,0 +1,53 @@
+// Holding a place on a rod with a rigid holder (an anchor or a gripper).
+//
+// A grasp takes one segment: its two nodes and, optionally, its orientation follow the holder
+// rigidly. The segment's pose relative to the holder is recorded when grasping, so grasping
+// never moves the rod; after that, hold() drives the segment to holder_pose * offset.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <string>
+
+#include "corde_sim/rod.h"
+
+namespace corde {
+
+// A place on a rod that something holds.
+struct GraspSpec {
+  std::string name, rod;
+  enum class Place { kStart, kEnd, kNode, kArcLength } place = Place::kEnd;
+  double value = 0.0;            // node index or arc length (m) for kNode / kArcLength
+  bool hold_orientation = true;  // hold the frame too (rotating the holder twists the rod)
+};
+
+struct Grasp {
+  std::string name;
+  std::string rod;
+  int segment = 0;
+  Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();  // segment pose in the holder frame
+  bool hold_orientation = true;
+};
+
+// The segment a spec refers to: start -> 0, end -> N-1, node k -> min(k, N-1), arc length s ->
+// the segment whose midpoint (along the rest lengths) is nearest to s. Throws
+// std::out_of_range for a negative node index or a non-finite arc length.
+int grasp_segment(const Rod& rod, const GraspSpec& spec);
+
+// Pose of a segment: translation at its midpoint, rotation with the directors as columns.
+Eigen::Isometry3d segment_pose(const Rod& rod, int segment);
+
+// Records the segment's current pose relative to the holder.
+Grasp make_grasp(const Rod& rod, const GraspSpec& spec, const Eigen::Isometry3d& holder_pose);
+
+// Drives the grasped segment to holder_pose * offset by the end of the next step: its two nodes
+// to midpoint -/+ (rest length / 2) d3 (NodeDrive kTarget) and, if hold_orientation, its
+// orientation (SegmentDrive kTarget). Call before each step with the holder's pose at the end of
+// that step; drives already present on those nodes or that segment are replaced. Allocates
+// nothing once the drives exist.
+void hold(Rod& rod, const Grasp& grasp, const Eigen::Isometry3d& holder_pose);
+
+// Removes the grasp's target drives (others, e.g. a fixed clamp on a shared node, stay). The
+// segment continues from its current position and from the velocity of the last held step.
+void release(Rod& rod, const Grasp& grasp);
+
+}  // namespace corde
