@@ -1,0 +1,359 @@
+#include "corde_sim/scene.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "corde_sim/stability.h"
+#include "scene_reader.h"
+
+namespace corde {
+namespace {
+
+using scene_detail::Map;
+using scene_detail::num;
+using scene_detail::Value;
+
+// Which entry constrains each node and segment of a rod, to reject conflicting constraints.
+struct Owners {
+  std::map<int, std::string> node, segment;
+  std::string ghost[2];
+
+  void claim(std::map<int, std::string>* owners, int index, const char* what, const Value& v,
+             const std::string& owner) {
+    auto it = owners->find(index);
+    if (it != owners->end())
+      v.fail(std::string(what) + " " + std::to_string(index) + " is already constrained by " +
+             it->second);
+    (*owners)[index] = owner;
+  }
+};
+
+// "start", "end" or an index in [0, count).
+int read_index(const Value& v, int count, const char* what) {
+  if (v.is_scalar() && v.node().Scalar() == "start") return 0;
+  if (v.is_scalar() && v.node().Scalar() == "end") return count - 1;
+  if (!v.is_scalar()) v.fail(std::string("expected a ") + what + " index, start or end");
+  double d = 0.0;
+  try {
+    d = v.node().as<double>();
+  } catch (const YAML::Exception&) {
+    v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
+  }
+  if (d != std::floor(d) || d < 0.0 || d > count - 1)
+    v.fail(std::string(what) + " index " + v.node().Scalar() + " out of range (0.." +
+           std::to_string(count - 1) + ", start or end)");
+  return static_cast<int>(d);
+}
+
+void read_boundary(const Value& entry, Rod* rod, Owners* owners) {
+  Map b(entry);
+  const std::string kind = b.one_of({"node", "segment", "clamp"});
+  const std::string owner = entry.path();
+  const int n = rod->num_segments();
+  if (kind == "node") {
+    const Value nv = b.get("node");
+    const int node = read_index(nv, n + 1, "node");
+    NodeDrive d;
+    d.node = node;
+    d.origin = rod->positions()[node];
+    if (b.one_of({"fix", "velocity"}) == "fix") {
+      const Value f = b.get("fix");
+      if (!f.boolean()) f.fail("must be true (leave the entry out for a free node)");
+      d.kind = NodeDrive::Kind::kFixed;
+    } else {
+      d.kind = NodeDrive::Kind::kVelocity;
+      d.velocity = b.get("velocity").vec3();
+      if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+    }
+    owners->claim(&owners->node, node, "node", nv, owner);
+    rod->add_node_drive(d);
+  } else if (kind == "segment") {
+    const Value sv = b.get("segment");
+    const int seg = read_index(sv, n, "segment");
+    SegmentDrive d;
+    d.segment = seg;
+    d.origin = rod->orientations()[seg];
+    if (b.one_of({"fix", "spin_rate"}) == "fix") {
+      const Value f = b.get("fix");
+      if (!f.boolean()) f.fail("must be true (leave the entry out for a free segment)");
+      d.kind = SegmentDrive::Kind::kFixed;
+    } else {
+      d.kind = SegmentDrive::Kind::kSpin;
+      d.rate = b.get("spin_rate").number();
+      if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+    }
+    owners->claim(&owners->segment, seg, "segment", sv, owner);
+    rod->add_segment_drive(d);
+  } else {
+    const Value cv = b.get("clamp");
+    const bool end = cv.choice({"start", "end"}) == "end";
+    std::string how = "ghost";
+    if (auto k = b.find("kind")) how = k->choice({"natural", "ghost"});
+    const int node = end ? n : 0, seg = end ? n - 1 : 0;
+    NodeDrive nd;
+    nd.node = node;
+    nd.origin = rod->positions()[node];
+    owners->claim(&owners->node, node, "node", cv, owner);
+    rod->add_node_drive(nd);
+    if (how == "natural") {
+      SegmentDrive sd;
+      sd.segment = seg;
+      sd.origin = rod->orientations()[seg];
+      owners->claim(&owners->segment, seg, "segment", cv, owner);
+      rod->add_segment_drive(sd);
+    } else {
+      if (!owners->ghost[end].empty())
+        cv.fail("the " + cv.node().Scalar() + " is already clamped by " + owners->ghost[end]);
+      owners->ghost[end] = owner;
+      GhostFrame& g = end ? rod->ghost_end() : rod->ghost_start();
+      g.active = true;
+      g.frame = rod->orientations()[seg];
+      g.uhat.setZero();
+    }
+  }
+  b.finish();
+}
+
+void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings) {
+  Map m(entry);
+  Load l;
+  const int n = rod->num_segments();
+  if (m.one_of({"node", "segment"}) == "node") {
+    l.kind = Load::Kind::kForce;
+    l.index = read_index(m.get("node"), n + 1, "node");
+    l.value = m.get("force").vec3();
+    if (rod->node_drive(l.index))
+      warnings->push_back(entry.path() + ": force on a driven node has no effect");
+  } else {
+    l.kind = Load::Kind::kTorque;
+    l.index = read_index(m.get("segment"), n, "segment");
+    l.value = m.get("torque").vec3();
+    if (rod->segment_drive(l.index))
+      warnings->push_back(entry.path() + ": torque on a driven segment has no effect");
+  }
+  if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative();
+  if (auto t = m.find("start_time")) l.t_start = t->non_negative();
+  m.finish();
+  rod->add_load(l);
+}
+
+struct RodEntry {
+  std::string path;
+  Owners owners;
+};
+
+void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* entries) {
+  Map m(v);
+  RodSpec spec;
+  spec.name = "rod" + std::to_string(index);
+  if (auto p = m.find("name")) {
+    spec.name = p->string();
+    if (spec.name.empty()) p->fail("must not be empty");
+    for (size_t i = 0; i < entries->size(); ++i)
+      if (scene->world.rods()[i].name() == spec.name)
+        p->fail("duplicate rod name '" + spec.name + "' (also " + (*entries)[i].path + ")");
+  }
+  if (auto p = m.find("elements")) {
+    spec.elements = p->integer();
+    if (spec.elements < 1) p->fail("must be >= 1, got " + std::to_string(spec.elements));
+    if (spec.elements > 100000) p->fail("must be <= 100000, got " + std::to_string(spec.elements));
+  }
+  spec.section = scene_detail::read_section(&m);
+  spec.shape = scene_detail::read_shape(m.get("shape"));
+  if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
+  if (auto p = m.find("rest_shape"))
+    spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
+  Rod* rod = nullptr;
+  try {
+    rod = &scene->world.add_rod(build_rod(spec));
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(v.path() + ".shape: " + e.what());
+  }
+  RodEntry entry{v.path(), {}};
+  if (auto b = m.find("boundary"))
+    for (const Value& item : b->items()) read_boundary(item, rod, &entry.owners);
+  if (auto l = m.find("loads"))
+    for (const Value& item : l->items()) read_load(item, rod, &scene->warnings);
+  m.finish();
+  entries->push_back(std::move(entry));
+}
+
+GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* entries,
+                     std::map<std::string, std::string>* names) {
+  Map m(v);
+  GraspSpec g;
+  const Value nv = m.get("name");
+  g.name = nv.string();
+  if (g.name.empty()) nv.fail("must not be empty");
+  if (names->count(g.name))
+    nv.fail("duplicate grasp name '" + g.name + "' (also " + names->at(g.name) + ")");
+  (*names)[g.name] = v.path();
+  const auto& rods = scene.world.rods();
+  int r = 0;
+  if (auto rv = m.find("rod")) {
+    g.rod = rv->string();
+    while (r < static_cast<int>(rods.size()) && rods[r].name() != g.rod) ++r;
+    if (r == static_cast<int>(rods.size())) {
+      std::string known;
+      for (const Rod& rod : rods) known += (known.empty() ? "" : ", ") + rod.name();
+      rv->fail("no rod named '" + g.rod + "' (rods: " + known + ")");
+    }
+  } else if (rods.size() == 1) {
+    g.rod = rods[0].name();
+  } else {
+    throw SceneError(v.path() + ".rod: missing (required when the scene has several rods)");
+  }
+  const Rod& rod = rods[r];
+  std::string place = "end";
+  if (auto p = m.find("place")) place = p->choice({"start", "end", "node", "arc_length"});
+  std::optional<Value> value = m.find("value");
+  if (place == "start" || place == "end") {
+    g.place = place == "start" ? GraspSpec::Place::kStart : GraspSpec::Place::kEnd;
+    if (value) value->fail("only used with place: node or arc_length");
+  } else {
+    if (!value) throw SceneError(v.path() + ".value: missing (required with place: " + place + ")");
+    if (place == "node") {
+      g.place = GraspSpec::Place::kNode;
+      g.value = read_index(*value, rod.num_nodes(), "node");
+    } else {
+      g.place = GraspSpec::Place::kArcLength;
+      double total = 0.0;
+      for (double l : rod.rest_lengths()) total += l;
+      g.value = value->non_negative();
+      if (g.value > total * (1.0 + 1e-12))
+        value->fail("arc length " + num(g.value) + " m beyond the rod's length " + num(total) +
+                    " m");
+    }
+  }
+  if (auto p = m.find("hold_orientation")) g.hold_orientation = p->boolean();
+  m.finish();
+  // A grasp drives its segment and both of its nodes: nothing else may.
+  Owners& owners = (*entries)[r].owners;
+  const int seg = grasp_segment(rod, g);
+  const std::string owner = v.path() + " (grasp '" + g.name + "')";
+  owners.claim(&owners.node, seg, "node", v, owner);
+  owners.claim(&owners.node, seg + 1, "node", v, owner);
+  if (g.hold_orientation) owners.claim(&owners.segment, seg, "segment", v, owner);
+  return g;
+}
+
+void check_time_step(Scene* scene, const Value* given) {
+  double limit = INFINITY;
+  std::string which;
+  StabilityEstimate worst;
+  for (const Rod& rod : scene->world.rods()) {
+    const StabilityEstimate e = estimate_stability(rod);
+    if (e.time_step < limit) {
+      limit = e.time_step;
+      which = rod.name();
+      worst = e;
+    }
+  }
+  if (!given) {
+    scene->world.time_step = 0.8 * limit;
+    return;
+  }
+  const double h = scene->world.time_step;
+  if (h > limit)
+    scene->warnings.push_back("time_step: " + num(h) + " s exceeds the estimated stability limit " +
+                              num(limit) + " s of rod '" + which + "' (" + worst.limiting +
+                              " modes); the run will likely blow up, use <= " + num(0.8 * limit) +
+                              " s or time_step: auto");
+}
+
+std::string stem(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  const size_t dot = base.find_last_of('.');
+  return dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
+}
+
+Scene build_scene(const YAML::Node& root, const std::string& source);
+
+}  // namespace
+
+Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& overrides,
+                  const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw SceneError(source + ":" + std::to_string(e.mark.line + 1) + ":" +
+                     std::to_string(e.mark.column + 1) + ": YAML syntax error: " + e.msg);
+  }
+  if (!root.IsDefined() || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  const std::vector<std::string> set = scene_detail::apply_overrides(&root, overrides);
+  try {
+    return build_scene(root, source);
+  } catch (const SceneError& e) {
+    // Values from overrides carry line numbers of their own one-line text: name the override.
+    std::string msg = e.what();
+    const std::string path = msg.substr(0, msg.find(": "));
+    for (size_t i = 0; i < set.size(); ++i) {
+      const std::string& p = set[i];
+      if (path.compare(0, p.size(), p) != 0 ||
+          (path.size() > p.size() && path[p.size()] != '.' && path[p.size()] != '['))
+        continue;
+      const size_t line = msg.rfind(" (line ");
+      if (line != std::string::npos) msg.erase(line);
+      throw SceneError(msg + " (set by override '" + overrides[i] + "')");
+    }
+    throw;
+  }
+}
+
+namespace {
+
+Scene build_scene(const YAML::Node& root, const std::string& source) {
+  Scene scene;
+  scene.source = source;
+  scene.name = source == "<string>" ? "scene" : stem(source);
+  Map top(Value(root, ""));
+  if (auto v = top.find("name")) scene.name = v->string();
+  if (auto v = top.find("description")) scene.description = v->string();
+  if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
+  if (auto v = top.find("integrator")) v->choice({"semi_implicit_euler"});
+  scene.world.integrator = Integrator::kSemiImplicitEuler;
+  if (auto v = top.find("duration")) scene.duration = v->positive();
+  std::optional<Value> step = top.find("time_step");
+  bool step_given = false;
+  if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {
+    scene.world.time_step = step->positive();
+    step_given = true;
+  }
+  if (step_given && scene.world.time_step > scene.duration)
+    step->fail("longer than the duration " + num(scene.duration) + " s");
+
+  std::vector<RodEntry> entries;
+  const Value rods = top.get("rods");
+  const std::vector<Value> items = rods.items();
+  if (items.empty()) rods.fail("needs at least one rod");
+  for (size_t i = 0; i < items.size(); ++i)
+    read_rod(items[i], static_cast<int>(i), &scene, &entries);
+  if (auto g = top.find("grasps")) {
+    std::map<std::string, std::string> names;
+    for (const Value& item : g->items())
+      scene.grasps.push_back(read_grasp(item, scene, &entries, &names));
+  }
+  top.finish();
+  check_time_step(&scene, step_given ? &*step : nullptr);
+  return scene;
+}
+
+}  // namespace
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path);
+  if (!in) throw SceneError(path + ": cannot open the file");
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw SceneError(path + ": cannot read the file");
+  return parse_scene(text.str(), overrides, path);
+}
+
+}  // namespace corde

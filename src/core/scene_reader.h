@@ -1,0 +1,86 @@
+// Internal to the scene loader: typed access to a YAML tree that names the offending key's path
+// in every error, and catches unknown keys.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "corde_sim/energy_terms.h"
+#include "corde_sim/material.h"
+#include "corde_sim/rod_shape.h"
+#include "corde_sim/scene.h"
+
+namespace corde {
+namespace scene_detail {
+
+// Formats a number for messages the way a user would type it (shortest round trip, %g-like).
+std::string num(double v);
+
+// A node of the tree and its path ("rods[0].material.E").
+class Value {
+ public:
+  Value(YAML::Node node, std::string path) : node_(std::move(node)), path_(std::move(path)) {}
+  const YAML::Node& node() const { return node_; }
+  const std::string& path() const { return path_; }
+
+  // Throws SceneError "<path>: <reason>", with the line in the file when known.
+  [[noreturn]] void fail(const std::string& reason) const;
+
+  bool is_scalar() const { return node_.IsScalar(); }
+  bool is_map() const { return node_.IsMap(); }
+  bool is_sequence() const { return node_.IsSequence(); }
+  std::string describe() const;  // "the string 'abc'", "a sequence of 2", "a map", "null"
+
+  double number() const;  // finite
+  double positive() const;
+  double non_negative() const;
+  int integer() const;
+  bool boolean() const;
+  std::string string() const;
+  Vec3 vec3() const;
+  Vec3 nonzero_vec3() const;
+  // One of `choices`; fails listing them.
+  std::string choice(const std::vector<std::string>& choices) const;
+  std::vector<Value> items() const;  // a sequence's items with paths "<path>[i]"
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+};
+
+// A mapping whose keys are accounted for: finish() fails on any key never asked for.
+class Map {
+ public:
+  explicit Map(const Value& v);
+  const std::string& path() const { return path_; }
+  bool has(const std::string& key) const;
+  std::optional<Value> find(const std::string& key);
+  Value get(const std::string& key);  // required
+  // Fails unless exactly one of `keys` is present; returns it.
+  std::string one_of(const std::vector<std::string>& keys) const;
+  [[noreturn]] void fail(const std::string& reason) const;
+  void finish() const;
+
+ private:
+  std::string child_path(const std::string& key) const;
+  YAML::Node node_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+// The section of rods[i] from its `material` and `radius` keys (scene_material.cpp).
+Section read_section(Map* rod);
+// The `shape` of a rod (scene_material.cpp).
+RodShape read_shape(const Value& v);
+
+// Applies "key.path=value" overrides to the tree (see parse_scene()). Returns, per override, the
+// path it set in message form ("rods[0].elements").
+std::vector<std::string> apply_overrides(YAML::Node* root,
+                                         const std::vector<std::string>& overrides);
+
+}  // namespace scene_detail
+}  // namespace corde
