@@ -1,0 +1,121 @@
+// The run loop behind corde_run: CSV output, held grasps, blow-up detection, summary.
+#include <gtest/gtest.h>
+
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "corde_sim/scene.h"
+#include "corde_sim/scene_runner.h"
+
+namespace corde {
+namespace {
+
+const char* kScene = R"(
+name: hanging
+description: a short cantilever sagging, its end held by a grasp
+time_step: 1.0e-5
+duration: 0.002
+rods:
+  - name: cable
+    elements: 4
+    material: {preset: soft_cable, gamma_t: 0.2}
+    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], length: 0.2}
+    boundary:
+      - {clamp: start}
+grasps:
+  - {name: gripper, place: end}
+)";
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) out.push_back(l);
+  return out;
+}
+
+TEST(SceneRunner, WritesCsvEveryKStepsAndAtTheEnd) {
+  Scene s = parse_scene(kScene);
+  std::ostringstream csv;
+  RunOptions o;
+  o.csv = &csv;
+  o.every = 60;  // 200 steps: rows at steps 0, 60, 120, 180 and the final 200
+  const RunResult r = run_scene(&s, o);
+  EXPECT_TRUE(r.finite);
+  EXPECT_EQ(r.steps, 200);
+  EXPECT_NEAR(r.sim_time, 0.002, 1e-15);
+  const std::vector<std::string> l = lines(csv.str());
+  ASSERT_EQ(l.size(), 1u + 5 * 4);
+  EXPECT_EQ(l[0], "t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw");
+  EXPECT_EQ(l[1].rfind("0,cable,0,0,0,1,0.05,0,1,", 0), 0u) << l[1];
+  EXPECT_EQ(l[5].rfind("0.0006,cable,0,", 0), 0u) << l[5];
+  EXPECT_EQ(l[17].rfind("0.002,cable,0,", 0), 0u) << l[17];
+  EXPECT_EQ(l[20].rfind("0.002,cable,3,", 0), 0u) << l[20];
+  // 13 columns per row.
+  EXPECT_EQ(std::count(l[20].begin(), l[20].end(), ','), 12);
+}
+
+TEST(SceneRunner, HoldsGraspsInPlace) {
+  Scene s = parse_scene(kScene, {"duration=0.05"});
+  const Rod& rod = s.world.rods()[0];
+  const Vec3 end = rod.positions()[4], before_end = rod.positions()[3];
+  const Vec3 middle = rod.positions()[2];
+  const RunResult r = run_scene(&s);
+  ASSERT_TRUE(r.finite);
+  EXPECT_LT((rod.positions()[4] - end).norm(), 1e-12);
+  EXPECT_LT((rod.positions()[3] - before_end).norm(), 1e-12);
+  EXPECT_GT((rod.positions()[2] - middle).norm(), 1e-6);  // gravity pulled the middle down
+  EXPECT_GT(r.energies.elastic(), 0.0);
+}
+
+TEST(SceneRunner, DurationOptionAndDefaultEvery) {
+  Scene s = parse_scene(kScene);
+  RunOptions o;
+  o.duration = 0.0005;
+  std::ostringstream csv;
+  o.csv = &csv;
+  const RunResult r = run_scene(&s, o);
+  EXPECT_EQ(r.steps, 50);
+  EXPECT_EQ(r.every, 1000);                        // 10 ms of simulated time at 1e-5 s
+  EXPECT_EQ(lines(csv.str()).size(), 1u + 2 * 4);  // start and end
+}
+
+TEST(SceneRunner, StopsAtTheFirstNonFiniteState) {
+  // Ten times the stability limit: blows up within a few hundred steps.
+  Scene s = parse_scene(kScene, {"time_step=2e-4", "duration=1"});
+  ASSERT_FALSE(s.warnings.empty());
+  const RunResult r = run_scene(&s);
+  EXPECT_FALSE(r.finite);
+  EXPECT_GT(r.failed_step, 0);
+  EXPECT_LT(r.failed_step, 5000);
+  EXPECT_EQ(r.steps, r.failed_step);
+  EXPECT_NEAR(r.failed_time, r.failed_step * 2e-4, 1e-9);
+  EXPECT_NE(run_summary(s, r).find("(at failure)"), std::string::npos);
+}
+
+TEST(SceneRunner, SummaryNamesSceneRodsAndTimes) {
+  Scene s = parse_scene(kScene);
+  const RunResult r = run_scene(&s);
+  const std::string text = run_summary(s, r);
+  for (const char* want : {"hanging", "cable (4 elements)", "200 of 1e-05 s", "us/step", "kinetic",
+                           "elastic", "step limit"})
+    EXPECT_NE(text.find(want), std::string::npos) << want << " in\n" << text;
+}
+
+TEST(SceneRunner, ReportsProgress) {
+  Scene s = parse_scene(kScene, {"duration=0.02"});
+  RunOptions o;
+  o.progress_interval = 0.0;
+  int calls = 0;
+  double last = 0.0;
+  o.progress = [&](double fraction, double, double) {
+    ++calls;
+    EXPECT_GT(fraction, last);
+    last = fraction;
+  };
+  run_scene(&s, o);
+  EXPECT_EQ(calls, 2000 / 256);
+}
+
+}  // namespace
+}  // namespace corde
