@@ -1,0 +1,63 @@
+# corde_sim: convenience targets around the plain CMake build in ./build (see README).
+#   make deps    install the Debian packages (scripts/install_deps.sh; fast when nothing is missing)
+#   make build   deps + configure (first time) + incremental build
+#   make run     build, then run the main job ($(RUN_CMD))
+#   make test    build, then every test through ctest (unit tests and rostests)
+#   make bench   build, then the benchmarks
+#   make format  clang-format over src, include, test
+#   make clean   remove the build folder
+SHELL := /bin/bash
+.SHELLFLAGS := -o pipefail -c
+
+BUILD_DIR  ?= build
+BUILD_TYPE ?= Release
+JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
+PYTHON     ?= /usr/bin/python3
+CMAKE_ARGS ?=
+CTEST_ARGS ?=
+BENCH_ARGS ?=
+# The main job. Later: the ROS node, e.g. roslaunch corde_sim sim.launch
+RUN_CMD    ?= ./$(BUILD_DIR)/corde_run config/scenes/default.yaml
+
+# Puts the package on ROS_PACKAGE_PATH (rostest, roslaunch) when the ROS part was built. ROS
+# python nodes start with `#!/usr/bin/env python3`: put the system python3 (which has rospy)
+# first on PATH, ahead of pyenv/conda/venv interpreters.
+SOURCE_DEVEL = export PATH="/usr/bin:$$PATH"; \
+  if [ -f $(BUILD_DIR)/devel/setup.bash ]; then source $(BUILD_DIR)/devel/setup.bash; fi
+
+.PHONY: all deps configure build run test bench format clean
+
+all: build
+
+deps:
+	@bash scripts/install_deps.sh
+
+# Configure once; afterwards `cmake --build` re-runs CMake by itself when CMakeLists.txt or a
+# globbed source folder changes.
+$(BUILD_DIR)/CMakeCache.txt:
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
+
+configure: deps
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
+
+build: deps
+	@$(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt
+	cmake --build $(BUILD_DIR) -j$(JOBS)
+
+run: build
+	$(SOURCE_DEVEL); $(RUN_CMD)
+
+test: build
+	$(SOURCE_DEVEL); cd $(BUILD_DIR) && ctest --output-on-failure $(CTEST_ARGS)
+
+bench: build
+	@if [ ! -x $(BUILD_DIR)/corde_bench ]; then echo "corde_bench is not built (src/tools/corde_bench.cpp missing?)"; exit 1; fi
+	./$(BUILD_DIR)/corde_bench $(BENCH_ARGS)
+
+format:
+	@command -v clang-format >/dev/null || bash scripts/install_deps.sh --dev
+	find src include test \( -name '*.cpp' -o -name '*.h' -o -name '*.hpp' \) -print0 2>/dev/null \
+	  | xargs -0 -r clang-format -i
+
+clean:
+	rm -rf $(BUILD_DIR)

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 (bookworm) packages corde_sim needs: compiler and CMake, the rod
+# library's dependencies, Debian's own ROS 1 packages (under /usr, no /opt/ros), test and
+# benchmark frameworks, and Xvfb + Mesa + ImageMagick for headless rviz screenshots.
+#
+# Fast no-op when everything is installed: apt-get (update + install) runs only when dpkg reports
+# a package missing. Uses sudo when not run as root.
+#
+#   scripts/install_deps.sh          # build, test and run dependencies
+#   scripts/install_deps.sh --dev    # also developer tools (clang-format)
+#   scripts/install_deps.sh --list   # print the package list and exit
+set -euo pipefail
+
+packages=(
+  # toolchain
+  g++ make cmake pkg-config
+  # rod library
+  libeigen3-dev libyaml-cpp-dev libfcl-dev liburdfdom-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # ROS 1 (Debian packages): build system, message generation, C++ client libraries
+  ros-base-dev catkin python3-catkin-pkg ros-message-generation ros-message-runtime
+  python3-genmsg python3-gencpp python3-genpy
+  libroscpp-dev libroslib-dev libtf2-dev libtf2-ros-dev libtf2-geometry-msgs-dev
+  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libtf2-msgs-dev
+  libros-rosgraph-msgs-dev libdiagnostic-msgs-dev
+  libvisualization-msgs-dev libdiagnostic-updater-dev libinteractive-markers-dev
+  # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
+  python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
+  python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
+  # visualisation: rviz, headless X server with software OpenGL, screenshots, charts
+  rviz librviz-dev xvfb xauth libgl1-mesa-dri x11-utils imagemagick python3-matplotlib
+)
+dev_packages=(clang-format)
+
+for arg in "$@"; do
+  case "$arg" in
+    --dev) packages+=("${dev_packages[@]}") ;;
+    --list) printf '%s\n' "${packages[@]}"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+    *) echo "install_deps.sh: unknown option '$arg'" >&2; exit 2 ;;
+  esac
+done
+
+# Which packages are not fully installed? (one dpkg-query call; unknown names are missing too)
+mapfile -t installed < <(dpkg-query -W -f='${Package} ${db:Status-Status}\n' "${packages[@]}" \
+  2>/dev/null | awk '$2 == "installed" {print $1}' | sort -u)
+missing=()
+for p in "${packages[@]}"; do
+  found=0
+  for q in "${installed[@]}"; do
+    if [ "$p" = "$q" ]; then found=1; break; fi
+  done
+  [ "$found" = 1 ] || missing+=("$p")
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "install_deps.sh: all ${#packages[@]} packages are installed"
+  exit 0
+fi
+
+echo "install_deps.sh: installing ${#missing[@]} missing packages: ${missing[*]}"
+sudo=()
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then
+    sudo=(sudo)
+  else
+    echo "install_deps.sh: not root and sudo is not available; install as root:" >&2
+    echo "  apt-get install ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
+"${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+  "${missing[@]}"
+echo "install_deps.sh: done"
