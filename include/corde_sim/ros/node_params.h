@@ -1,0 +1,55 @@
+// Parameters of corde_sim_node: read from the private namespace, validated and logged.
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace corde_sim {
+
+enum class MarkerStyle { kLineStrip, kCylinders };
+
+// How a grasp's holder moves: from grasps/<name>/pose messages, by following a tf frame, or not
+// at all (it holds the pose it had when it was made).
+enum class GraspSource { kTopic, kTf, kFixed };
+
+struct GraspSourceParam {
+  GraspSource source = GraspSource::kTopic;
+  std::string frame;  // tf frame followed when source is kTf
+};
+
+struct NodeParams {
+  std::string scene;                   // YAML scene file
+  std::vector<std::string> overrides;  // "key.path=value" applied to the scene (load_scene)
+  std::string world_frame = "world";
+  std::string frame_prefix;       // "" or ends with '/'
+  double real_time_factor = 1.0;  // 0 = as fast as possible
+  bool publish_clock = false;
+  double tf_rate = 50.0;  // Hz of wall time, 0 = off
+  int tf_every_k = 1;
+  double marker_rate = 20.0;  // Hz of wall time, 0 = off
+  double state_rate = 50.0;   // Hz of wall time, 0 = off
+  MarkerStyle marker_style = MarkerStyle::kCylinders;
+  bool show_frames = false;
+  bool color_by_strain = true;
+  double marker_min_diameter = 0.004;  // m: thin rods are drawn at least this thick
+  double max_pose_age = 1.0;           // s
+  double loop_rate = 200.0;            // Hz: wake-ups of the paced loop
+  bool start_paused = false;
+  double benchmark = 0.0;  // s of wall time; > 0 runs, prints timings and exits
+  std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame}
+};
+
+// Parses "topic" | "tf" | "fixed"; throws std::invalid_argument otherwise.
+GraspSource parse_grasp_source(const std::string& s);
+const char* to_string(GraspSource s);
+
+// Reads every parameter from `pnh` (the private handle), validates it and logs it. `ns` is the
+// node's namespace, used for the default frame prefix. Throws std::invalid_argument with a
+// message naming the parameter on a bad value.
+NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
+                            const std::string& default_scene);
+
+}  // namespace corde_sim

@@ -1,0 +1,16 @@
+// corde_interactive_grasp: drag a grasp of corde_sim_node with an rviz interactive marker.
+#include <ros/ros.h>
+
+#include "corde_sim/ros/interactive_grasp.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "corde_interactive_grasp");
+  try {
+    corde_sim::InteractiveGrasp node(ros::NodeHandle(), ros::NodeHandle("~"));
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("corde_interactive_grasp: cannot start: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

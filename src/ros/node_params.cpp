@@ -1,0 +1,173 @@
+#include "corde_sim/ros/node_params.h"
+
+#include <ros/console.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace corde_sim {
+namespace {
+
+[[noreturn]] void bad(const std::string& name, const std::string& why) {
+  throw std::invalid_argument("parameter ~" + name + ": " + why);
+}
+
+double read_rate(const ros::NodeHandle& pnh, const std::string& name, double def) {
+  double v = def;
+  pnh.param(name, v, def);
+  if (!std::isfinite(v) || v < 0.0 || v > 10000.0)
+    bad(name, "must be a rate in Hz in [0, 10000] (0 = off), got " + std::to_string(v));
+  return v;
+}
+
+void check_frame(const std::string& name, const std::string& frame, bool allow_empty) {
+  if (frame.empty() && !allow_empty) bad(name, "must not be empty");
+  if (!frame.empty() && frame[0] == '/')
+    bad(name, "frame ids have no leading slash: '" + frame + "'");
+  if (frame.find_first_of(" \t\n") != std::string::npos) bad(name, "frame ids have no spaces");
+}
+
+}  // namespace
+
+GraspSource parse_grasp_source(const std::string& s) {
+  if (s == "topic") return GraspSource::kTopic;
+  if (s == "tf") return GraspSource::kTf;
+  if (s == "fixed") return GraspSource::kFixed;
+  throw std::invalid_argument("grasp source must be topic, tf or fixed, got '" + s + "'");
+}
+
+const char* to_string(GraspSource s) {
+  switch (s) {
+    case GraspSource::kTopic:
+      return "topic";
+    case GraspSource::kTf:
+      return "tf";
+    case GraspSource::kFixed:
+      return "fixed";
+  }
+  return "?";
+}
+
+NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
+                            const std::string& default_scene) {
+  NodeParams p;
+  pnh.param<std::string>("scene", p.scene, default_scene);
+  if (p.scene.empty()) bad("scene", "no scene file given and the package path is unknown");
+
+  // ~overrides: a list of "key.path=value" strings, or one string with ';' between them.
+  XmlRpc::XmlRpcValue ov;
+  if (pnh.getParam("overrides", ov)) {
+    if (ov.getType() == XmlRpc::XmlRpcValue::TypeString) {
+      std::string all = ov, item;
+      for (char c : all + ";") {
+        if (c != ';') {
+          item += c;
+        } else if (!item.empty()) {
+          p.overrides.push_back(item);
+          item.clear();
+        }
+      }
+    } else if (ov.getType() == XmlRpc::XmlRpcValue::TypeArray) {
+      for (int i = 0; i < ov.size(); ++i) {
+        if (ov[i].getType() != XmlRpc::XmlRpcValue::TypeString)
+          bad("overrides", "must be a list of \"key.path=value\" strings");
+        p.overrides.push_back(static_cast<std::string>(ov[i]));
+      }
+    } else {
+      bad("overrides", "must be a list of \"key.path=value\" strings");
+    }
+  }
+
+  pnh.param<std::string>("world_frame", p.world_frame, "world");
+  check_frame("world_frame", p.world_frame, false);
+
+  // Default prefix: the namespace without its leading slash, so /sim1 draws sim1/cable/seg_0.
+  std::string def_prefix = ns;
+  while (!def_prefix.empty() && def_prefix.front() == '/') def_prefix.erase(0, 1);
+  if (!def_prefix.empty() && def_prefix.back() != '/') def_prefix += '/';
+  pnh.param<std::string>("frame_prefix", p.frame_prefix, def_prefix);
+  check_frame("frame_prefix", p.frame_prefix, true);
+  if (!p.frame_prefix.empty() && p.frame_prefix.back() != '/') p.frame_prefix += '/';
+
+  pnh.param("real_time_factor", p.real_time_factor, 1.0);
+  if (!std::isfinite(p.real_time_factor) || p.real_time_factor < 0.0 || p.real_time_factor > 1e6)
+    bad("real_time_factor",
+        "must be >= 0 (0 = as fast as possible), got " + std::to_string(p.real_time_factor));
+  pnh.param("publish_clock", p.publish_clock, false);
+
+  p.tf_rate = read_rate(pnh, "tf_rate", 50.0);
+  p.marker_rate = read_rate(pnh, "marker_rate", 20.0);
+  p.state_rate = read_rate(pnh, "state_rate", 50.0);
+  p.loop_rate = read_rate(pnh, "loop_rate", 200.0);
+  if (p.loop_rate < 1.0) bad("loop_rate", "must be >= 1 Hz");
+  pnh.param("tf_every_k", p.tf_every_k, 1);
+  if (p.tf_every_k < 1)
+    bad("tf_every_k", "must be an integer >= 1, got " + std::to_string(p.tf_every_k));
+
+  std::string style;
+  pnh.param<std::string>("marker_style", style, "cylinders");
+  if (style == "cylinders")
+    p.marker_style = MarkerStyle::kCylinders;
+  else if (style == "line_strip")
+    p.marker_style = MarkerStyle::kLineStrip;
+  else
+    bad("marker_style", "must be line_strip or cylinders, got '" + style + "'");
+  pnh.param("show_frames", p.show_frames, false);
+  pnh.param("color_by_strain", p.color_by_strain, true);
+  pnh.param("marker_min_diameter", p.marker_min_diameter, 0.004);
+  if (!std::isfinite(p.marker_min_diameter) || p.marker_min_diameter < 0.0 ||
+      p.marker_min_diameter > 1.0)
+    bad("marker_min_diameter", "must be in [0, 1] m");
+
+  pnh.param("max_pose_age", p.max_pose_age, 1.0);
+  if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
+    bad("max_pose_age", "must be > 0 s, got " + std::to_string(p.max_pose_age));
+  pnh.param("start_paused", p.start_paused, false);
+  pnh.param("benchmark", p.benchmark, 0.0);
+  if (!std::isfinite(p.benchmark) || p.benchmark < 0.0) bad("benchmark", "must be >= 0 s");
+
+  XmlRpc::XmlRpcValue grasps;
+  if (pnh.getParam("grasps", grasps)) {
+    if (grasps.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+      bad("grasps", "must be a dictionary of grasp names");
+    for (auto it = grasps.begin(); it != grasps.end(); ++it) {
+      const std::string key = "grasps/" + it->first;
+      GraspSourceParam g;
+      std::string source = "topic";
+      pnh.param<std::string>(key + "/source", source, "topic");
+      try {
+        g.source = parse_grasp_source(source);
+      } catch (const std::invalid_argument& e) {
+        bad(key + "/source", e.what());
+      }
+      pnh.param<std::string>(key + "/frame", g.frame, "");
+      if (g.source == GraspSource::kTf) check_frame(key + "/frame", g.frame, false);
+      p.grasps[it->first] = g;
+    }
+  }
+
+  ROS_INFO("corde_sim: ~scene = %s", p.scene.c_str());
+  for (const std::string& o : p.overrides) ROS_INFO("corde_sim: ~overrides: %s", o.c_str());
+  ROS_INFO("corde_sim: ~world_frame = %s, ~frame_prefix = '%s'", p.world_frame.c_str(),
+           p.frame_prefix.c_str());
+  ROS_INFO("corde_sim: ~real_time_factor = %g%s, ~publish_clock = %s", p.real_time_factor,
+           p.real_time_factor == 0.0 ? " (as fast as possible)" : "",
+           p.publish_clock ? "true" : "false");
+  ROS_INFO(
+      "corde_sim: ~tf_rate = %g Hz, ~tf_every_k = %d, ~marker_rate = %g Hz, ~state_rate = %g Hz, "
+      "~loop_rate = %g Hz",
+      p.tf_rate, p.tf_every_k, p.marker_rate, p.state_rate, p.loop_rate);
+  ROS_INFO(
+      "corde_sim: ~marker_style = %s, ~show_frames = %s, ~color_by_strain = %s, "
+      "~marker_min_diameter = %g m",
+      style.c_str(), p.show_frames ? "true" : "false", p.color_by_strain ? "true" : "false",
+      p.marker_min_diameter);
+  ROS_INFO("corde_sim: ~max_pose_age = %g s, ~start_paused = %s", p.max_pose_age,
+           p.start_paused ? "true" : "false");
+  for (const auto& g : p.grasps)
+    ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s", g.first.c_str(), to_string(g.second.source),
+             g.second.frame.empty() ? "" : ", frame ", g.second.frame.c_str());
+  return p;
+}
+
+}  // namespace corde_sim

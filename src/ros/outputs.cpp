@@ -1,0 +1,261 @@
+#include "corde_sim/ros/outputs.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace corde_sim {
+namespace {
+
+void set_transform(const Eigen::Vector3d& p, const Eigen::Quaterniond& q,
+                   geometry_msgs::Transform* t) {
+  t->translation.x = p.x();
+  t->translation.y = p.y();
+  t->translation.z = p.z();
+  t->rotation.x = q.x();
+  t->rotation.y = q.y();
+  t->rotation.z = q.z();
+  t->rotation.w = q.w();
+}
+
+void set_pose(const Eigen::Vector3d& p, const Eigen::Quaterniond& q, geometry_msgs::Pose* pose) {
+  pose->position.x = p.x();
+  pose->position.y = p.y();
+  pose->position.z = p.z();
+  pose->orientation.x = q.x();
+  pose->orientation.y = q.y();
+  pose->orientation.z = q.z();
+  pose->orientation.w = q.w();
+}
+
+geometry_msgs::Point point(const Eigen::Vector3d& p) {
+  geometry_msgs::Point out;
+  out.x = p.x();
+  out.y = p.y();
+  out.z = p.z();
+  return out;
+}
+
+std_msgs::ColorRGBA rgba(double r, double g, double b, double a = 1.0) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+// Blue (unstrained) through green to red (the rod's largest strain).
+std_msgs::ColorRGBA strain_color(double v) {
+  v = std::min(1.0, std::max(0.0, v));
+  if (v < 0.5) {
+    const double a = 2.0 * v;
+    return rgba(0.15, 0.35 + 0.45 * a, 0.9 - 0.6 * a);
+  }
+  const double a = 2.0 * (v - 0.5);
+  return rgba(0.15 + 0.8 * a, 0.8 - 0.6 * a, 0.3 - 0.2 * a);
+}
+
+std_msgs::ColorRGBA rod_color(size_t index) {
+  static const double palette[][3] = {
+      {0.85, 0.45, 0.1}, {0.2, 0.5, 0.9}, {0.3, 0.75, 0.3}, {0.8, 0.3, 0.7}, {0.9, 0.8, 0.2}};
+  const double* c = palette[index % 5];
+  return rgba(c[0], c[1], c[2]);
+}
+
+visualization_msgs::Marker base_marker(const std::string& ns, int id, int type,
+                                       const MarkerOptions& o, const ros::Time& stamp) {
+  visualization_msgs::Marker m;
+  m.header.frame_id = o.world_frame;
+  m.header.stamp = stamp;
+  m.ns = ns;
+  m.id = id;
+  m.type = type;
+  m.action = visualization_msgs::Marker::ADD;
+  m.pose.orientation.w = 1.0;
+  return m;
+}
+
+}  // namespace
+
+void TfFrames::layout(const corde::World& world, const std::vector<GraspView>& grasps,
+                      const std::string& prefix, const std::string& world_frame, int every_k) {
+  every_k_ = std::max(1, every_k);
+  tfs_.clear();
+  geometry_msgs::TransformStamped t;
+  t.header.frame_id = world_frame;
+  t.transform.rotation.w = 1.0;
+  for (const corde::Rod& rod : world.rods()) {
+    t.child_frame_id = prefix + rod.name();
+    tfs_.push_back(t);
+    for (int s = 0; s < rod.num_segments(); s += every_k_) {
+      t.child_frame_id = prefix + rod.name() + "/seg_" + std::to_string(s);
+      tfs_.push_back(t);
+    }
+  }
+  for (const GraspView& g : grasps) {
+    t.child_frame_id = prefix + "grasp/" + g.name;
+    tfs_.push_back(t);
+  }
+}
+
+const std::vector<geometry_msgs::TransformStamped>& TfFrames::update(
+    const corde::World& world, const std::vector<GraspView>& grasps, const ros::Time& stamp) {
+  size_t i = 0;
+  for (const corde::Rod& rod : world.rods()) {
+    const auto& x = rod.positions();
+    const auto& q = rod.orientations();
+    tfs_[i].header.stamp = stamp;
+    set_transform(x[0], q[0], &tfs_[i++].transform);
+    for (int s = 0; s < rod.num_segments(); s += every_k_) {
+      tfs_[i].header.stamp = stamp;
+      set_transform(0.5 * (x[s] + x[s + 1]), q[s], &tfs_[i++].transform);
+    }
+  }
+  for (const GraspView& g : grasps) {
+    tfs_[i].header.stamp = stamp;
+    set_transform(g.pose.translation(), Eigen::Quaterniond(g.pose.linear()), &tfs_[i++].transform);
+  }
+  return tfs_;
+}
+
+void segment_strains(const corde::Rod& rod, std::vector<double>* strain) {
+  const int n = rod.num_segments();
+  strain->assign(n, 0.0);
+  if (n < 2) return;
+  const double r = rod.section().radius;
+  const auto& q = rod.orientations();
+  const auto& rest = rod.rest_lengths();
+  for (int j = 0; j + 1 < n; ++j) {
+    const corde::Vec3 u = corde::darboux(q[j], q[j + 1], 0.5 * (rest[j] + rest[j + 1]));
+    const double e = r * (u - rod.rest_strains()[j]).norm();
+    (*strain)[j] += 0.5 * e;
+    (*strain)[j + 1] += 0.5 * e;
+  }
+  (*strain)[0] *= 2.0;
+  (*strain)[n - 1] *= 2.0;
+}
+
+void build_markers(const corde::World& world, const std::vector<GraspView>& grasps,
+                   const MarkerOptions& o, const ros::Time& stamp, bool clear_first,
+                   visualization_msgs::MarkerArray* out) {
+  using visualization_msgs::Marker;
+  out->markers.clear();
+  if (clear_first) {
+    Marker clear;
+    clear.header.frame_id = o.world_frame;
+    clear.header.stamp = stamp;
+    clear.action = 3;  // DELETEALL (constant missing from older message headers)
+    out->markers.push_back(clear);
+  }
+  std::vector<double> strain;
+  double max_diameter = 0.0;
+  for (size_t r = 0; r < world.rods().size(); ++r) {
+    const corde::Rod& rod = world.rods()[r];
+    const int n = rod.num_segments();
+    const auto& x = rod.positions();
+    const auto& q = rod.orientations();
+    const double diameter = std::max(2.0 * rod.section().radius, o.min_diameter);
+    max_diameter = std::max(max_diameter, diameter);
+    if (o.color_by_strain) {
+      segment_strains(rod, &strain);
+      // Scaled by the rod's own largest strain so that any material shows its pattern; the floor
+      // keeps a nearly straight rod blue instead of amplifying round-off.
+      const double top = std::max(1e-4, *std::max_element(strain.begin(), strain.end()));
+      for (double& e : strain) e /= top;
+    }
+    const std_msgs::ColorRGBA solid = rod_color(r);
+    auto color = [&](int s) { return o.color_by_strain ? strain_color(strain[s]) : solid; };
+    if (o.style == MarkerStyle::kCylinders) {
+      for (int s = 0; s < n; ++s) {
+        Marker m = base_marker(rod.name(), s, Marker::CYLINDER, o, stamp);
+        const Eigen::Vector3d d = x[s + 1] - x[s];
+        set_pose(0.5 * (x[s] + x[s + 1]), q[s], &m.pose);
+        m.scale.x = m.scale.y = diameter;
+        // Slightly longer than the chord so that neighbours overlap at bends.
+        m.scale.z = d.norm() + 0.5 * diameter;
+        m.color = color(s);
+        out->markers.push_back(std::move(m));
+      }
+    } else {
+      Marker m = base_marker(rod.name(), 0, Marker::LINE_STRIP, o, stamp);
+      m.scale.x = diameter;
+      m.points.reserve(n + 1);
+      m.colors.reserve(n + 1);
+      for (int i = 0; i <= n; ++i) {
+        m.points.push_back(point(x[i]));
+        m.colors.push_back(color(std::min(i, n - 1)));
+      }
+      m.color = solid;
+      out->markers.push_back(std::move(m));
+    }
+    if (o.show_frames) {
+      Marker m = base_marker(rod.name() + "/frames", 0, Marker::LINE_LIST, o, stamp);
+      m.scale.x = 0.25 * diameter;
+      m.color = rgba(1, 1, 1);
+      for (int s = 0; s < n; s += std::max(1, o.frames_every_k)) {
+        const Eigen::Vector3d mid = 0.5 * (x[s] + x[s + 1]);
+        const double len = std::max(0.6 * (x[s + 1] - x[s]).norm(), 3.0 * diameter);
+        const Eigen::Matrix3d rot = q[s].toRotationMatrix();
+        for (int k = 0; k < 3; ++k) {
+          m.points.push_back(point(mid));
+          m.points.push_back(point(mid + len * rot.col(k)));
+          const std_msgs::ColorRGBA c = rgba(k == 0, k == 1, k == 2);
+          m.colors.push_back(c);
+          m.colors.push_back(c);
+        }
+      }
+      out->markers.push_back(std::move(m));
+    }
+  }
+  const double grasp_size = std::max(0.02, 3.0 * max_diameter);
+  for (const GraspView& g : grasps) {
+    Marker m = base_marker("grasps", g.id, Marker::SPHERE, o, stamp);
+    set_pose(g.pose.translation(), Eigen::Quaterniond(g.pose.linear()), &m.pose);
+    m.scale.x = m.scale.y = m.scale.z = grasp_size;
+    m.color = rgba(1.0, 0.85, 0.1, 0.8);
+    out->markers.push_back(m);
+    Marker label = base_marker("grasp_labels", g.id, Marker::TEXT_VIEW_FACING, o, stamp);
+    label.pose.position = point(g.pose.translation() + Eigen::Vector3d(0, 0, 1.2 * grasp_size));
+    label.scale.z = grasp_size;
+    label.color = rgba(1, 1, 1);
+    label.text = g.name;
+    out->markers.push_back(std::move(label));
+  }
+}
+
+void fill_rod_states(const corde::World& world, WorldState* msg) {
+  msg->rods.resize(world.rods().size());
+  for (size_t r = 0; r < world.rods().size(); ++r) {
+    const corde::Rod& rod = world.rods()[r];
+    RodState& out = msg->rods[r];
+    out.name = rod.name();
+    const int n = rod.num_segments();
+    out.nodes.resize(n + 1);
+    out.velocities.resize(n + 1);
+    out.orientations.resize(n);
+    out.angular_velocities.resize(n);
+    for (int i = 0; i <= n; ++i) {
+      out.nodes[i] = point(rod.positions()[i]);
+      const corde::Vec3& v = rod.velocities()[i];
+      out.velocities[i].x = v.x();
+      out.velocities[i].y = v.y();
+      out.velocities[i].z = v.z();
+    }
+    for (int s = 0; s < n; ++s) {
+      const corde::Quat& q = rod.orientations()[s];
+      out.orientations[s].x = q.x();
+      out.orientations[s].y = q.y();
+      out.orientations[s].z = q.z();
+      out.orientations[s].w = q.w();
+      const corde::Vec3 w = q * rod.angular_velocities()[s];
+      out.angular_velocities[s].x = w.x();
+      out.angular_velocities[s].y = w.y();
+      out.angular_velocities[s].z = w.z();
+    }
+    const corde::Energies e = rod.energies(world.gravity);
+    out.kinetic_energy = e.kinetic();
+    out.elastic_energy = e.elastic();
+  }
+}
+
+}  // namespace corde_sim

@@ -1,0 +1,412 @@
+// SimNode: construction, the simulation loop and its outputs.
+#include "corde_sim/ros/sim_node.h"
+
+#include <ros/callback_queue.h>
+#include <ros/package.h>
+#include <rosgraph_msgs/Clock.h>
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "corde_sim/stability.h"
+
+namespace corde_sim {
+
+double wall_seconds() {
+  using clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+namespace {
+
+double process_cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+double thread_cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// Next deadline of a periodic output: one period on, or one period from now after a stall
+// (no bursts to catch up).
+double next_deadline(double deadline, double period, double now) {
+  deadline += period;
+  return deadline < now ? now + period : deadline;
+}
+
+}  // namespace
+
+SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {
+  const std::string pkg = ros::package::getPath("corde_sim");
+  params_ = load_node_params(pnh_, nh_.getNamespace(),
+                             pkg.empty() ? "" : pkg + "/config/scenes/default.yaml");
+  bool use_sim_time = false;
+  ros::param::get("/use_sim_time", use_sim_time);
+  if (params_.publish_clock && !use_sim_time)
+    throw std::invalid_argument(
+        "parameter ~publish_clock: true makes this node the time source, which needs "
+        "/use_sim_time true before any node starts (e.g. <param name=\"use_sim_time\" "
+        "value=\"true\"/> in the launch file)");
+  if (!params_.publish_clock && use_sim_time)
+    ROS_WARN(
+        "corde_sim: /use_sim_time is true but ~publish_clock is false: expecting another "
+        "node to publish /clock; stamps are that clock's time at start-up plus simulation "
+        "time");
+
+  corde::Scene scene;
+  try {
+    scene = corde::load_scene(params_.scene, params_.overrides);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("parameter ~scene: ") + e.what());
+  }
+  for (const auto& g : params_.grasps) {
+    const auto& specs = scene.grasps;
+    if (std::none_of(specs.begin(), specs.end(),
+                     [&](const corde::GraspSpec& s) { return s.name == g.first; }))
+      ROS_WARN(
+          "corde_sim: ~grasps/%s names no grasp of the scene (it only sets the source of a "
+          "grasp made later through ~grasp with that name)",
+          g.first.c_str());
+  }
+
+  // tf input: own subscriptions so that this node's own (large) /tf messages are skipped
+  // without being stored; everything else goes into the buffer.
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf", 100,
+      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
+          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, false); }));
+  tf_static_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
+      "/tf_static", 100,
+      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
+          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, true); }));
+
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
+  marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
+  state_pub_ = nh_.advertise<WorldState>("rod_state", 10);
+  if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+
+  std::string error = install_scene(std::move(scene), params_.scene);
+  if (!error.empty()) throw std::invalid_argument("parameter ~scene: " + error);
+
+  services_.push_back(pnh_.advertiseService("reset", &SimNode::on_reset, this));
+  services_.push_back(pnh_.advertiseService("configure", &SimNode::on_configure, this));
+  services_.push_back(pnh_.advertiseService("pause", &SimNode::on_pause, this));
+  services_.push_back(pnh_.advertiseService("step", &SimNode::on_step, this));
+  services_.push_back(pnh_.advertiseService("grasp", &SimNode::on_grasp, this));
+  services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
+
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
+  diagnostics_->setHardwareID("corde_sim");
+  diagnostics_->add("simulation", this, &SimNode::diagnose);
+
+  epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
+  paused_ = params_.start_paused;
+  ROS_INFO("corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), time step %g s, h/h_crit %.3f%s",
+           initial_.name.c_str(), world_.rods().size(), grasps_.size(), world_.time_step,
+           stability_margin_, paused_ ? ", paused" : "");
+}
+
+ros::Time SimNode::stamp() const {
+  // With /clock from this node the stamp is the simulation time itself; otherwise the ROS time
+  // at start-up plus simulation time, so each message still names the instant it shows.
+  return params_.publish_clock ? ros::Time(sim_time()) : epoch_ + ros::Duration(sim_time());
+}
+
+void SimNode::bump_time() {
+  // A changed state (reset, configure, grasp) gets a later stamp than anything published before,
+  // so tf listeners never see two different poses at one stamp.
+  time_offset_ += world_.time_step;
+}
+
+void SimNode::update_stability() {
+  stability_margin_ = 0.0;
+  limiting_rod_.clear();
+  for (const corde::Rod& rod : world_.rods()) {
+    const double m = world_.time_step / corde::critical_time_step(rod);
+    if (m > stability_margin_) {
+      stability_margin_ = m;
+      limiting_rod_ = rod.name();
+    }
+  }
+}
+
+long SimNode::run_steps(long n, double deadline) {
+  const double h = world_.time_step;
+  const double t0 = wall_seconds();
+  long k = 0;
+  for (; k < n; ++k) {
+    if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
+    if (!grasps_.empty()) hold_all(sim_time() + h, h);
+    world_.step();
+  }
+  const double dt = wall_seconds() - t0;
+  steps_total_ += k;
+  steps_since_stats_ += k;
+  step_wall_since_stats_ += dt;
+  steps_last_iteration_ = k;
+  return k;
+}
+
+void SimNode::advance(double now) {
+  if (pacer_.paced()) {
+    const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
+    // A batch may take a few loop periods; beyond that the simulation cannot keep up, and the
+    // backlog is dropped instead of growing (the measured real-time factor shows it).
+    const double budget = std::max(3.0 / params_.loop_rate, 0.02);
+    const long done = due > 0 ? run_steps(due, now + budget) : 0;
+    lagging_ = done < due;
+    if (lagging_) pacer_.anchor(sim_time(), wall_seconds());
+  } else {
+    // As fast as possible, in slices short enough to serve callbacks and outputs on time.
+    const double slice_end = std::min(now + 0.005, next_output_due());
+    run_steps(std::numeric_limits<long>::max(), std::max(slice_end, now));
+  }
+  check_finite();
+}
+
+double SimNode::next_output_due() const {
+  double t = std::numeric_limits<double>::infinity();
+  if (params_.tf_rate > 0.0) t = std::min(t, next_tf_);
+  if (params_.marker_rate > 0.0) t = std::min(t, next_marker_);
+  return std::min(t, next_stats_);
+}
+
+void SimNode::check_finite() {
+  if (world_.finite()) return;
+  const double t = sim_time();
+  world_ = last_good_;
+  time_offset_ = t - world_.time();  // the clock keeps going forward
+  ++recoveries_;
+  pacer_.anchor(sim_time(), wall_seconds());
+  ROS_ERROR_THROTTLE(1.0,
+                     "corde_sim: the state became non-finite at t = %.6f s; restored the last good "
+                     "state (h/h_crit = %.2f, limiting rod '%s'; a smaller time_step may help)",
+                     t, stability_margin_, limiting_rod_.c_str());
+}
+
+std::vector<GraspView> SimNode::grasp_views() const {
+  std::vector<GraspView> views;
+  const double t = sim_time();
+  for (const auto& kv : grasps_) {
+    if (!kv.second.held) continue;
+    GraspView v;
+    v.name = kv.first;
+    v.id = kv.second.marker_id;
+    v.pose = holder_pose(kv.second, t);
+    views.push_back(v);
+  }
+  return views;
+}
+
+void SimNode::refresh_layout() {
+  tf_frames_.layout(world_, grasp_views(), params_.frame_prefix, params_.world_frame,
+                    params_.tf_every_k);
+  markers_clear_ = true;
+  update_stability();
+}
+
+void SimNode::publish_tf() {
+  const double t = sim_time();
+  if (t <= last_tf_time_) return;                 // every frame once per stamp
+  if (params_.publish_clock && t <= 0.0) return;  // stamp 0 means "latest" to tf
+  last_tf_time_ = t;
+  if (tf_pub_.getNumSubscribers() == 0) return;
+  // One message per publish, handed over by pointer: in-process listeners get it without a copy.
+  auto msg = boost::make_shared<tf2_msgs::TFMessage>();
+  msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
+  tf_pub_.publish(msg);
+}
+
+void SimNode::publish_markers() {
+  if (marker_pub_.getNumSubscribers() == 0) return;
+  MarkerOptions o;
+  o.style = params_.marker_style;
+  o.show_frames = params_.show_frames;
+  o.color_by_strain = params_.color_by_strain;
+  o.min_diameter = params_.marker_min_diameter;
+  o.frames_every_k = params_.tf_every_k;
+  o.world_frame = params_.world_frame;
+  auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
+  build_markers(world_, grasp_views(), o, stamp(), markers_clear_, msg.get());
+  markers_clear_ = false;
+  marker_pub_.publish(msg);
+}
+
+void SimNode::update_stats(double now) {
+  if (steps_since_stats_ > 0) step_time_us_ = 1e6 * step_wall_since_stats_ / steps_since_stats_;
+  // Real-time factor averaged over about a second: one publish period holds only a few loop
+  // iterations, whose batches of steps do not line up with it.
+  const double wall = now - wall_at_stats_;
+  if (wall > 0.0) {
+    const double rtf = (sim_time() - sim_at_stats_) / wall;
+    const double a = std::min(1.0, wall / 1.0);
+    measured_rtf_ = rtf_initialised_ ? measured_rtf_ + a * (rtf - measured_rtf_) : rtf;
+    rtf_initialised_ = true;
+  }
+  substeps_per_publish_ = steps_since_stats_;
+  steps_since_stats_ = 0;
+  step_wall_since_stats_ = 0.0;
+  sim_at_stats_ = sim_time();
+  wall_at_stats_ = now;
+}
+
+void SimNode::publish_state() {
+  if (state_pub_.getNumSubscribers() == 0) return;
+  auto msg = boost::make_shared<WorldState>();
+  msg->header.stamp = stamp();
+  msg->header.frame_id = params_.world_frame;
+  fill_rod_states(world_, msg.get());
+  msg->sim_time = sim_time();
+  msg->steps = steps_total_;
+  msg->substeps_per_publish = static_cast<int>(substeps_per_publish_);
+  msg->time_step = world_.time_step;
+  msg->step_time_us = step_time_us_;
+  msg->real_time_factor = measured_rtf_;
+  msg->paused = paused_;
+  state_pub_.publish(msg);
+}
+
+void SimNode::publish_clock() {
+  const double t = sim_time();
+  if (t <= last_clock_ || t <= 0.0) return;
+  last_clock_ = t;
+  rosgraph_msgs::Clock c;
+  c.clock = ros::Time(t);
+  clock_pub_.publish(c);
+}
+
+void SimNode::publish_due(double now, bool force) {
+  bool any = false;
+  if (params_.publish_clock) publish_clock();
+  if (params_.tf_rate > 0.0 && (force || now >= next_tf_)) {
+    publish_tf();
+    next_tf_ = next_deadline(next_tf_, 1.0 / params_.tf_rate, now);
+    any = true;
+  }
+  if (params_.marker_rate > 0.0 && (force || now >= next_marker_)) {
+    publish_markers();
+    next_marker_ = next_deadline(next_marker_, 1.0 / params_.marker_rate, now);
+    any = true;
+  }
+  // Statistics follow the state message, or run at 2 Hz when it is off.
+  const double stats_period = params_.state_rate > 0.0 ? 1.0 / params_.state_rate : 0.5;
+  if (force || now >= next_stats_) {
+    update_stats(now);
+    if (params_.state_rate > 0.0) publish_state();
+    next_stats_ = next_deadline(next_stats_, stats_period, now);
+    any = true;
+  }
+  if (any) last_good_ = world_;  // published, so known finite: the state to fall back on
+}
+
+void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
+  using diagnostic_msgs::DiagnosticStatus;
+  const double target = params_.real_time_factor;
+  if (recoveries_ > recoveries_reported_) {
+    stat.summaryf(DiagnosticStatus::ERROR, "state became non-finite %d time(s); restored",
+                  recoveries_ - recoveries_reported_);
+    recoveries_reported_ = recoveries_;
+  } else if (stability_margin_ > 1.0) {
+    stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
+                  stability_margin_);
+  } else if (!paused_ && target > 0.0 && lagging_) {
+    stat.summaryf(DiagnosticStatus::WARN, "slower than real_time_factor %.3g (measured %.3g)",
+                  target, measured_rtf_);
+  } else {
+    stat.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
+  }
+  stat.add("simulation time (s)", sim_time());
+  stat.add("steps", steps_total_);
+  stat.add("time step (s)", world_.time_step);
+  stat.add("step time (us)", step_time_us_);
+  stat.add("real-time factor (measured)", measured_rtf_);
+  stat.add("real-time factor (target, 0 = max)", target);
+  stat.add("substeps per loop", steps_last_iteration_);
+  stat.add("stability margin h/h_crit", stability_margin_);
+  stat.add("stability limiting rod", limiting_rod_);
+  stat.add("rods", world_.rods().size());
+  stat.add("grasps", grasps_.size());
+  stat.add("recoveries from non-finite state", recoveries_);
+}
+
+int SimNode::run() {
+  ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
+  double now = wall_seconds();
+  pacer_.reset(params_.real_time_factor, sim_time(), now);
+  next_tf_ = next_marker_ = next_stats_ = now;
+  sim_at_stats_ = sim_time();
+  wall_at_stats_ = now;
+  const double start_wall = now, start_cpu = process_cpu_seconds(), start_sim = sim_time();
+  const unsigned long start_steps = steps_total_;
+  const double bench_end =
+      params_.benchmark > 0.0 ? now + params_.benchmark : std::numeric_limits<double>::infinity();
+  double step_wall_total = 0.0, output_wall_total = 0.0, output_wall_max = 0.0;
+  while (ros::ok()) {
+    queue->callAvailable(ros::WallDuration(0));
+    update_tf_holders();
+    now = wall_seconds();
+    if (!paused_) {
+      const double before = step_wall_since_stats_;
+      advance(now);
+      step_wall_total += std::max(0.0, step_wall_since_stats_ - before);
+    }
+    now = wall_seconds();
+    publish_due(now, false);
+    diagnostics_->update();
+    const double out_wall = wall_seconds() - now;
+    output_wall_total += out_wall;
+    output_wall_max = std::max(output_wall_max, out_wall);
+    if (now >= bench_end) break;
+    double wake = now;
+    if (paused_)
+      wake = now + 0.05;
+    else if (pacer_.paced())
+      wake = std::min(next_output_due(), now + 1.0 / params_.loop_rate);
+    if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
+  }
+  if (params_.benchmark > 0.0) {
+    ROS_INFO(
+        "corde_sim benchmark: outputs (tf, markers, state, clock, diagnostics) took %.3f s "
+        "in all, %.2f ms at most per loop iteration",
+        output_wall_total, 1e3 * output_wall_max);
+    return benchmark_report(wall_seconds() - start_wall, process_cpu_seconds() - start_cpu,
+                            steps_total_ - start_steps, sim_time() - start_sim, step_wall_total);
+  }
+  return 0;
+}
+
+int SimNode::benchmark_report(double wall, double cpu, unsigned long steps, double sim,
+                              double step_wall) {
+  // The bare library on the same scene: the same number of steps in a tight loop, no ROS.
+  corde::World bare = initial_.world;
+  const double c0 = thread_cpu_seconds();
+  for (unsigned long i = 0; i < steps; ++i) bare.step();
+  const double bare_cpu = thread_cpu_seconds() - c0;
+  const double overhead = bare_cpu > 0.0 ? (cpu - bare_cpu) / bare_cpu : 0.0;
+  ROS_INFO(
+      "corde_sim benchmark: %.2f s wall, %lu steps, %.4f s simulated, real-time factor %.2f "
+      "(target %g)",
+      wall, steps, sim, sim / wall, params_.real_time_factor);
+  ROS_INFO(
+      "corde_sim benchmark: process CPU %.3f s (%.1f%% of wall), time in steps %.3f s, bare "
+      "library %.3f s for the same steps: node overhead %.1f%% of the bare steps "
+      "(%.2f us/step bare, %.2f us/step in the node loop)",
+      cpu, 100.0 * cpu / wall, step_wall, bare_cpu, 100.0 * overhead,
+      steps ? 1e6 * bare_cpu / steps : 0.0, steps ? 1e6 * step_wall / steps : 0.0);
+  std::printf(
+      "benchmark wall_s=%.3f steps=%lu sim_s=%.5f rtf=%.3f cpu_s=%.4f step_s=%.4f "
+      "bare_s=%.4f overhead_pct=%.2f\n",
+      wall, steps, sim, sim / wall, cpu, step_wall, bare_cpu, 100.0 * overhead);
+  std::fflush(stdout);
+  return 0;
+}
+
+}  // namespace corde_sim

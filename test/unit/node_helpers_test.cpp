@@ -1,0 +1,76 @@
+// Pure helpers of the ROS adapter (pacing, holder motion, input checks); no ROS needed.
+#include <gtest/gtest.h>
+
+#include "corde_sim/ros/holder_trajectory.h"
+#include "corde_sim/ros/input_checks.h"
+#include "corde_sim/ros/pacer.h"
+
+namespace corde_sim {
+namespace {
+
+TEST(Pacer, StepsFollowScaledWallTime) {
+  Pacer p;
+  p.reset(0.5, 10.0, 100.0);  // half real time, sim 10 s at wall 100 s
+  const double h = 1e-3;
+  EXPECT_EQ(p.steps_due(10.0, 100.0, h), 0);
+  EXPECT_EQ(p.steps_due(10.0, 100.1, h), 50);  // 0.1 s wall = 0.05 s sim
+  EXPECT_EQ(p.steps_due(10.05, 100.1, h), 0);  // already there
+  EXPECT_EQ(p.steps_due(10.0, 100.0999, h), 49);
+  EXPECT_NEAR(p.wall_at(10.05), 100.1, 1e-12);
+  p.anchor(10.05, 200.0);  // a pause: no backlog afterwards
+  EXPECT_EQ(p.steps_due(10.05, 200.0, h), 0);
+}
+
+TEST(Pacer, UnpacedNeverSchedules) {
+  Pacer p;
+  p.reset(0.0, 0.0, 0.0);
+  EXPECT_FALSE(p.paced());
+  EXPECT_EQ(p.steps_due(0.0, 1e6, 1e-4), 0);
+}
+
+TEST(HolderTrajectory, MovesContinuouslyToEachGoal) {
+  HolderTrajectory h;
+  Eigen::Isometry3d a = Eigen::Isometry3d::Identity();
+  h.reset(a);
+  Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
+  b.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
+  b.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  h.set_goal(2.0, b, 0.1);
+  EXPECT_LT((h.at(2.0).translation() - a.translation()).norm(), 1e-12);
+  EXPECT_NEAR(h.at(2.05).translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(h.at(2.05).linear()).angle(), 0.5, 1e-12);
+  EXPECT_LT((h.at(2.2).translation() - b.translation()).norm(), 1e-12);
+  // A new goal half-way starts from where the holder is, not from the old goal.
+  Eigen::Isometry3d c = Eigen::Isometry3d::Identity();
+  h.set_goal(2.05, c, 0.1);
+  EXPECT_NEAR(h.at(2.05).translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(h.at(2.10).translation().x(), 0.25, 1e-12);
+  // Zero duration: at once.
+  h.set_goal(3.0, b, 0.0);
+  EXPECT_NEAR(h.at(3.0).translation().x(), 1.0, 1e-12);
+}
+
+TEST(InputChecks, Poses) {
+  Eigen::Quaterniond q(1.0005, 0.0, 0.0, 0.0);
+  EXPECT_EQ(check_pose(Eigen::Vector3d::Zero(), &q), "");
+  EXPECT_NEAR(q.norm(), 1.0, 1e-15);
+  Eigen::Quaterniond bad(1.01, 0.0, 0.0, 0.0);
+  EXPECT_NE(check_pose(Eigen::Vector3d::Zero(), &bad), "");
+  Eigen::Quaterniond zero(0.0, 0.0, 0.0, 0.0);
+  EXPECT_NE(check_pose(Eigen::Vector3d::Zero(), &zero), "");
+  Eigen::Quaterniond ok = Eigen::Quaterniond::Identity();
+  EXPECT_NE(check_pose(Eigen::Vector3d(NAN, 0, 0), &ok), "");
+  Eigen::Quaterniond inf(INFINITY, 0, 0, 0);
+  EXPECT_NE(check_pose(Eigen::Vector3d::Zero(), &inf), "");
+  EXPECT_NE(check_vector(Eigen::Vector3d(0, INFINITY, 0), "force"), "");
+}
+
+TEST(InputChecks, StampAge) {
+  EXPECT_EQ(check_stamp_age(0.5, false, 1.0), "");
+  EXPECT_NE(check_stamp_age(1.5, false, 1.0), "");
+  EXPECT_NE(check_stamp_age(-1.5, false, 1.0), "");
+  EXPECT_EQ(check_stamp_age(1e9, true, 1.0), "");  // zero stamp: "now"
+}
+
+}  // namespace
+}  // namespace corde_sim
