@@ -42,7 +42,7 @@ configure: deps
 
 build: deps
 	@$(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt
-	cmake --build $(BUILD_DIR) -j$(JOBS)
+	cmake --build $(BUILD_DIR) -j$(JOBS) -- --no-print-directory
 
 run: build
 	$(SOURCE_DEVEL); $(RUN_CMD)
