@@ -80,8 +80,6 @@ Section read_section(Map* rod) {
   at_most_one(m, "E_s", "K_s");
   if (m && ((m->has("G") ? 1 : 0) + (m->has("nu") ? 1 : 0) + (m->has("C") ? 1 : 0)) > 1)
     m->fail("give only one of G, nu and C");
-  at_most_one(m, "damping_time", "gamma_t");
-  at_most_one(m, "damping_time", "gamma_r");
 
   if (auto v = positive_key(m, "E")) E = v;
   if (auto v = positive_key(m, "G")) G = v;

@@ -121,6 +121,15 @@ TEST(SceneParse, MaterialDirectStiffnessAndDampingTime) {
   EXPECT_DOUBLE_EQ(sec.gamma_r, 0.002 * 0.5);   // tau B = tau E I
 }
 
+TEST(SceneParse, ExplicitFrictionOverridesDampingTime) {
+  const Scene s = parse_scene(
+      "rods: [{material: {preset: soft_cable, damping_time: 0.001, gamma_t: 0.2}, shape: {type: "
+      "straight}}]");
+  const Section& sec = s.world.rods()[0].section();
+  EXPECT_DOUBLE_EQ(sec.gamma_t, 0.2);
+  EXPECT_DOUBLE_EQ(sec.gamma_r, 0.001 * sec.bend);
+}
+
 TEST(SceneParse, PresetByNameMatchesLibrary) {
   const Scene s = parse_scene(rod_scene("    material: paper_rope\n    shape: {type: straight}\n"));
   const MaterialPreset& p = material_preset("paper_rope");
