@@ -78,7 +78,11 @@ int main(int argc, char** argv) {
   try {
     scene = corde::load_scene(scene_path, overrides);
   } catch (const corde::SceneError& e) {
-    std::fprintf(stderr, "corde_run: %s: %s\n", scene_path.c_str(), e.what());
+    const std::string msg = e.what();  // file errors already start with the file's name
+    if (msg.rfind(scene_path, 0) == 0)
+      std::fprintf(stderr, "corde_run: %s\n", msg.c_str());
+    else
+      std::fprintf(stderr, "corde_run: %s: %s\n", scene_path.c_str(), msg.c_str());
     return 1;
   }
   if (!quiet)
@@ -102,7 +106,8 @@ int main(int argc, char** argv) {
     options.progress = [&](double fraction, double t, double wall) {
       if (wall < 2.0 || fraction <= 0.0) return;
       const double eta = wall * (1.0 - fraction) / fraction;
-      std::fprintf(stderr, "\r\033[K[%3.0f%%] t = %.4g s, ETA %.0f s", 100.0 * fraction, t, eta);
+      std::fprintf(stderr, "\r\033[K[%3.0f%%] t = %.4g / %.4g s, ETA %.0f s", 100.0 * fraction, t,
+                   scene.duration, eta);
       std::fflush(stderr);
       progress_shown = true;
     };
