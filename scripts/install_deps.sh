@@ -4,7 +4,8 @@
 # benchmark frameworks, and Xvfb + Mesa + ImageMagick for headless rviz screenshots.
 #
 # Fast no-op when everything is installed: apt-get (update + install) runs only when dpkg reports
-# a package missing. Uses sudo when not run as root.
+# a package missing. Uses sudo when not run as root. Also makes sure `localhost` and the host name
+# resolve (ROS needs both; a minimal system may lack /etc/hosts).
 #
 #   scripts/install_deps.sh          # build, test and run dependencies
 #   scripts/install_deps.sh --dev    # also developer tools (clang-format)
@@ -28,8 +29,7 @@ packages=(
   # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
   python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
   python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
-  # command-line checks of the node (rostopic echo, rosservice call, tf_echo) and demo_coiling's
-  # static_transform_publisher
+  # command-line checks of the node (rostopic echo, rosservice call, tf_echo)
   python3-std-srvs python3-diagnostic-msgs python3-visualization-msgs python3-tf2-ros tf-tools
   # visualisation: rviz, headless X server with software OpenGL, screenshots, charts
   rviz librviz-dev xvfb xauth libgl1-mesa-dri x11-utils imagemagick python3-matplotlib
@@ -44,6 +44,34 @@ for arg in "$@"; do
     *) echo "install_deps.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
+
+sudo=()
+if [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1; then
+  sudo=(sudo)
+fi
+
+# ROS needs `localhost` and this machine's host name to resolve: roslaunch/rostest always treat
+# the local machine as `localhost`, and nodes advertise http://<hostname>:<port>/ URIs. A minimal
+# system (debootstrap chroot, some containers) may have no /etc/hosts at all; add what is missing.
+ensure_hosts() {
+  local name names=(localhost)
+  local host
+  host=$(hostname 2>/dev/null || cat /etc/hostname 2>/dev/null || true)
+  [ -n "$host" ] && names+=("$host")
+  for name in "${names[@]}"; do
+    if ! getent hosts "$name" >/dev/null 2>&1; then
+      echo "install_deps.sh: '$name' does not resolve; adding '127.0.0.1 $name' to /etc/hosts"
+      if [ "$(id -u)" -eq 0 ]; then
+        echo "127.0.0.1 $name" >>/etc/hosts
+      elif [ "${#sudo[@]}" -gt 0 ]; then
+        echo "127.0.0.1 $name" | "${sudo[@]}" tee -a /etc/hosts >/dev/null
+      else
+        echo "install_deps.sh: cannot write /etc/hosts (not root, no sudo); ROS tests will fail" >&2
+      fi
+    fi
+  done
+}
+ensure_hosts
 
 # Which packages are not fully installed? (one dpkg-query call; unknown names are missing too)
 mapfile -t installed < <(dpkg-query -W -f='${Package} ${db:Status-Status}\n' "${packages[@]}" \
@@ -63,17 +91,11 @@ if [ "${#missing[@]}" -eq 0 ]; then
 fi
 
 echo "install_deps.sh: installing ${#missing[@]} missing packages: ${missing[*]}"
-sudo=()
-if [ "$(id -u)" -ne 0 ]; then
-  if command -v sudo >/dev/null 2>&1; then
-    sudo=(sudo)
-  else
-    echo "install_deps.sh: not root and sudo is not available; install as root:" >&2
-    echo "  apt-get install ${missing[*]}" >&2
-    exit 1
-  fi
+if [ "$(id -u)" -ne 0 ] && [ "${#sudo[@]}" -eq 0 ]; then
+  echo "install_deps.sh: not root and sudo is not available; install as root:" >&2
+  echo "  apt-get install ${missing[*]}" >&2
+  exit 1
 fi
-export DEBIAN_FRONTEND=noninteractive
 "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get update -q
 "${sudo[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
   "${missing[@]}"
