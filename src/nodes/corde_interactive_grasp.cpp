@@ -5,8 +5,11 @@
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "corde_interactive_grasp");
+  // Handles outlive the node object: destroying the last one shuts ROS (and its logging) down,
+  // which would swallow the fatal message below.
+  ros::NodeHandle nh, pnh("~");
   try {
-    corde_sim::InteractiveGrasp node(ros::NodeHandle(), ros::NodeHandle("~"));
+    corde_sim::InteractiveGrasp node(nh, pnh);
     ros::spin();
   } catch (const std::exception& e) {
     ROS_FATAL("corde_interactive_grasp: cannot start: %s", e.what());

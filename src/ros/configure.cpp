@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "corde_sim/rod_edit.h"
+#include "corde_sim/ros/input_checks.h"
 
 namespace corde_sim {
 namespace {
@@ -117,7 +118,7 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
     const KeyRange* range = find_range(k);
     if (!range) return "unknown key '" + k + "' (keys: " + join(configure_keys()) + ")";
     if (plan->values.count(k)) return "key '" + k + "' given twice";
-    if (!std::isfinite(v)) return k + " must be finite, got " + std::to_string(v);
+    if (!std::isfinite(v)) return k + " must be finite, got " + num(v);
     const bool low_ok = range->lo_inclusive ? v >= range->lo : v > range->lo;
     if (!low_ok || v > range->hi) {
       std::ostringstream os;
@@ -125,8 +126,7 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
          << range->hi << "] " << range->unit << ", got " << v;
       return os.str();
     }
-    if (k == "elements" && v != std::round(v))
-      return "elements must be an integer, got " + std::to_string(v);
+    if (k == "elements" && v != std::round(v)) return "elements must be an integer, got " + num(v);
     plan->values[k] = v;
   }
   for (size_t i = 0; i < flags.size(); ++i) {

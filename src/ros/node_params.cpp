@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "corde_sim/ros/input_checks.h"
+
 namespace corde_sim {
 namespace {
 
@@ -16,7 +18,7 @@ double read_rate(const ros::NodeHandle& pnh, const std::string& name, double def
   double v = def;
   pnh.param(name, v, def);
   if (!std::isfinite(v) || v < 0.0 || v > 10000.0)
-    bad(name, "must be a rate in Hz in [0, 10000] (0 = off), got " + std::to_string(v));
+    bad(name, "must be a rate in Hz in [0, 10000] (0 = off), got " + num(v));
   return v;
 }
 
@@ -92,7 +94,7 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   pnh.param("real_time_factor", p.real_time_factor, 1.0);
   if (!std::isfinite(p.real_time_factor) || p.real_time_factor < 0.0 || p.real_time_factor > 1e6)
     bad("real_time_factor",
-        "must be >= 0 (0 = as fast as possible), got " + std::to_string(p.real_time_factor));
+        "must be >= 0 (0 = as fast as possible), got " + num(p.real_time_factor));
   pnh.param("publish_clock", p.publish_clock, false);
 
   p.tf_rate = read_rate(pnh, "tf_rate", 50.0);
@@ -121,7 +123,7 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
 
   pnh.param("max_pose_age", p.max_pose_age, 1.0);
   if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
-    bad("max_pose_age", "must be > 0 s, got " + std::to_string(p.max_pose_age));
+    bad("max_pose_age", "must be > 0 s, got " + num(p.max_pose_age));
   pnh.param("start_paused", p.start_paused, false);
   pnh.param("benchmark", p.benchmark, 0.0);
   if (!std::isfinite(p.benchmark) || p.benchmark < 0.0) bad("benchmark", "must be >= 0 s");

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
 #include "corde_sim/stability.h"
 
@@ -32,7 +33,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   bump_time();
   pacer_.anchor(sim_time(), wall_seconds());
   res.success = true;
-  res.message = "reset to '" + path + "' at t = " + std::to_string(sim_time()) + " s";
+  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s";
   ROS_INFO("corde_sim: %s", res.message.c_str());
   publish_due(wall_seconds(), true);
   return true;
@@ -77,9 +78,9 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   }
   if (!std::isfinite(margin) || margin > std::max(1.0, margin_before)) {
     res.success = false;
-    res.message = "rejected, nothing changed: time_step " + std::to_string(world.time_step) +
+    res.message = "rejected, nothing changed: time_step " + num(world.time_step) +
                   " s would exceed the stability limit of rod '" + limiting + "' (h/h_crit " +
-                  std::to_string(margin) + "); give a smaller time_step in the same request";
+                  num(margin) + "); give a smaller time_step in the same request";
     return true;
   }
   std::swap(world_, world);
@@ -91,7 +92,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   res.success = true;
   res.message = "configured " +
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
-                summary + "(h/h_crit " + std::to_string(stability_margin_) + ")";
+                summary + "(h/h_crit " + num(stability_margin_) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
   publish_due(wall_seconds(), true);
   return true;
@@ -103,8 +104,7 @@ bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Respo
     if (!paused_) pacer_.anchor(sim_time(), wall_seconds());  // no backlog from the pause
   }
   res.success = true;
-  res.message =
-      std::string(paused_ ? "paused" : "running") + " at t = " + std::to_string(sim_time()) + " s";
+  res.message = std::string(paused_ ? "paused" : "running") + " at t = " + num(sim_time()) + " s";
   return true;
 }
 
@@ -178,8 +178,8 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
     for (double l : rod->rest_lengths()) length += l;
     if (!std::isfinite(req.arc_length) || req.arc_length < 0.0 || req.arc_length > length) {
       res.success = false;
-      res.message = "arc_length " + std::to_string(req.arc_length) + " m is outside rod '" +
-                    req.rod + "' (rest length " + std::to_string(length) + " m)";
+      res.message = "arc_length " + num(req.arc_length) + " m is outside rod '" + req.rod +
+                    "' (rest length " + num(length) + " m)";
       return true;
     }
     spec.place = corde::GraspSpec::Place::kArcLength;

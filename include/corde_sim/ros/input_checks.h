@@ -4,9 +4,17 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace corde_sim {
+
+// A number for messages: six significant digits, no trailing zeros (%g).
+inline std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", v);
+  return buf;
+}
 
 // Quaternions whose norm is off by more than this are rejected; closer ones are normalised.
 constexpr double kQuaternionNormTolerance = 1e-3;
@@ -22,7 +30,7 @@ inline std::string check_pose(const Eigen::Vector3d& p, Eigen::Quaterniond* q) {
   if (!q->coeffs().allFinite()) return "orientation is not finite";
   const double n = q->norm();
   if (std::abs(n - 1.0) > kQuaternionNormTolerance)
-    return "orientation is not a unit quaternion (norm " + std::to_string(n) + ")";
+    return "orientation is not a unit quaternion (norm " + num(n) + ")";
   q->normalize();
   return "";
 }
@@ -31,12 +39,9 @@ inline std::string check_pose(const Eigen::Vector3d& p, Eigen::Quaterniond* q) {
 inline std::string check_stamp_age(double age, bool stamp_is_zero, double max_age) {
   if (stamp_is_zero) return "";
   if (!std::isfinite(age)) return "stamp is not finite";
-  if (age > max_age)
-    return "stamp is " + std::to_string(age) + " s old (max_pose_age " + std::to_string(max_age) +
-           " s)";
+  if (age > max_age) return "stamp is " + num(age) + " s old (max_pose_age " + num(max_age) + " s)";
   if (age < -max_age)
-    return "stamp is " + std::to_string(-age) + " s in the future (max_pose_age " +
-           std::to_string(max_age) + " s)";
+    return "stamp is " + num(-age) + " s in the future (max_pose_age " + num(max_age) + " s)";
   return "";
 }
 
