@@ -117,7 +117,7 @@ class SimNode {
   void bump_time();
   ros::Time stamp() const;
   std::vector<GraspView> grasp_views() const;
-  int benchmark_report(double wall, double cpu, unsigned long steps, double sim, double step_wall);
+  int benchmark_report(double wall, double cpu, unsigned long steps, double sim, double step_cpu);
 
   ros::NodeHandle nh_, pnh_;
   NodeParams params_;
@@ -141,6 +141,7 @@ class SimNode {
   unsigned long steps_total_ = 0;
   long steps_since_stats_ = 0, substeps_per_publish_ = 0, steps_last_iteration_ = 0;
   double step_wall_since_stats_ = 0.0;
+  double step_cpu_total_ = 0.0;  // thread CPU time spent in run_steps (s)
   double sim_at_stats_ = 0.0, wall_at_stats_ = 0.0;
   double step_time_us_ = 0.0, measured_rtf_ = 0.0;
   bool lagging_ = false, rtf_initialised_ = false;
