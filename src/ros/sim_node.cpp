@@ -88,7 +88,10 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
       boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
           [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, true); }));
 
-  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
+  // A listener that connects while the simulation is paused would otherwise see no frames until
+  // it resumes (frames are sent once per stamp): it alone gets the current ones.
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>(
+      "/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { send_tf_to(pub); });
   marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
   state_pub_ = nh_.advertise<WorldState>("rod_state", 10);
   if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -225,6 +228,14 @@ void SimNode::publish_tf() {
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
   tf_pub_.publish(msg);
+}
+
+void SimNode::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
+  if (!paused_ || params_.tf_rate <= 0.0 || (params_.publish_clock && sim_time() <= 0.0)) return;
+  if (pub.getSubscriberName() == ros::this_node::getName()) return;
+  auto msg = boost::make_shared<tf2_msgs::TFMessage>();
+  msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
+  pub.publish(msg);
 }
 
 void SimNode::publish_markers() {

@@ -108,6 +108,7 @@ class SimNode {
   double next_output_due() const;
   void publish_due(double now, bool force);
   void publish_tf();
+  void send_tf_to(const ros::SingleSubscriberPublisher& pub);
   void publish_markers();
   void publish_state();
   void publish_clock();
