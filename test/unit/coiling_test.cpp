@@ -11,9 +11,10 @@
 // Start clamp: node 0 fixed and segment 0 spun about its tangent at 20 pi rad/s (SegmentDrive
 // kSpin); the segments start with the linear twist-rate profile of that spin, so no torsional
 // shock runs along the rod. End clamp: node N fixed and a ghost frame. The arch turns over and
-// forms a loop at t = 0.25 .. 0.3 s. Kelvin-Voigt friction with a 10 us retardation time keeps
-// the top modes quiet (an undamped N = 200 run at 0.8 of the undamped critical step blew up once
-// coiled, at t = 0.55 s); h = 0.8 of critical_time_step(), which includes that friction.
+// forms a loop at t = 0.25 .. 0.3 s. Kelvin-Voigt friction with a 10 us retardation time (damping
+// ratio ~0.15 on the top mode, 3e-4 on the coil's modes) is needed: undamped, this rod blows up
+// once coiled at every step tried (0.8 .. 0.15 of critical: t = 0.37 .. 0.75 s, N = 50 .. 200),
+// with it the runs stay stable past 1 s. h = 0.8 of critical_time_step(), which includes it.
 // Shapes are compared at 26 stations (every L/25, nodes at all three N), RMS distance.
 #include <gtest/gtest.h>
 
@@ -109,7 +110,7 @@ TEST(Coiling, ShapeDifferenceShrinksWithN) {
     EXPECT_LT(d2, d1) << "t = " << kTimes[k];
     EXPECT_LT(d2, 0.01 * kLength) << "t = " << kTimes[k];
     if (k >= kFormed) {
-      EXPECT_GT(drop, 0.1 * kLength) << "no coil yet at t = " << kTimes[k];
+      EXPECT_GT(drop, 0.08 * kLength) << "no coil yet at t = " << kTimes[k];  // 0.10 .. 0.15 L
     }
     sum[k >= kFormed][0] += d1 * d1;
     sum[k >= kFormed][1] += d2 * d2;
