@@ -1,13 +1,13 @@
 // Discretisation independence of coiling (CoRdE paper, Fig. 5: "the global deformation is
 // independent of the discretization"), made quantitative: the same twisted rod at N = 50, 100,
-// 200, compared at the same times after it has coiled; the shape difference between N and 2N
-// must shrink as N grows.
+// 200, compared at the same times while and after it coils; the shape difference between N and
+// 2N must shrink as N grows.
 //
 // Setup (chosen to coil within a fraction of a second): the example material (E = E_s = 1e7,
 // G = E/3, rho = 1000, r = 1 cm, kappa = G A), L = 0.5 m, laid as a horizontal circular arc
 // between two clamps 0.4 m apart (20% slack; a circular arc under end moments only is in
 // equilibrium). Gravity -z pulls it out of its plane, which sets the direction of the coil
-// deterministically (without it the planar arch buckles from round-off, at N-dependent times).
+// deterministically (without it the planar arch buckles from a ~5e-4 m seed at N-dependent times).
 // Start clamp: node 0 fixed and segment 0 spun about its tangent at 20 pi rad/s (SegmentDrive
 // kSpin); the segments start with the linear twist-rate profile of that spin, so no torsional
 // shock runs along the rod. End clamp: node N fixed and a ghost frame. The arch turns over and
@@ -116,8 +116,8 @@ TEST(Coiling, ShapeDifferenceShrinksWithN) {
     sum[k >= kFormed][1] += d2 * d2;
   }
   // First order is expected: the spun end is a natural clamp, whose frozen segment is an O(1/N)
-  // change of the rod. Observed 0.97 while the loop forms; after the snap 0.5 .. 0.8, rising with
-  // N (0.64 .. 0.76 between N = 100, 200, 400): the snap amplifies differences, pre-asymptotic.
+  // change of the rod. Observed 0.90 while the loop forms; after the snap 0.55, rising with
+  // N (0.64 .. 0.76 at N 100, 200, 400): the snap amplifies differences, pre-asymptotic.
   const double forming = dyn::observed_order(std::sqrt(sum[0][0]), std::sqrt(sum[0][1]));
   const double coiled = dyn::observed_order(std::sqrt(sum[1][0]), std::sqrt(sum[1][1]));
   std::printf("coiling: observed order while forming %.2f, once coiled %.2f\n", forming, coiled);
