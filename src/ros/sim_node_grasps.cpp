@@ -88,6 +88,18 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   } catch (const std::exception& e) {
     return "grasp '" + spec.name + "': " + e.what();
   }
+  // A boundary condition (clamp, fixed or driven node or segment) there would be replaced by the
+  // grasp's drives and lost on release. Grasp drives are the kTarget ones.
+  for (int node : {seg, seg + 1}) {
+    const corde::NodeDrive* d = rod.node_drive(node);
+    if (d && d->kind != corde::NodeDrive::Kind::kTarget)
+      return "grasp '" + spec.name + "': node " + std::to_string(node) + " of segment " +
+             std::to_string(seg) + " has a boundary condition";
+  }
+  const corde::SegmentDrive* sd = rod.segment_drive(seg);
+  if (spec.hold_orientation && sd && sd->kind != corde::SegmentDrive::Kind::kTarget)
+    return "grasp '" + spec.name + "': segment " + std::to_string(seg) +
+           " has a boundary condition";
   if (source == GraspSource::kTf && frame.empty())
     return "grasp '" + spec.name + "': source tf needs a frame";
 
