@@ -379,7 +379,7 @@ int SimNode::run() {
     if (now >= bench_end) break;
     double wake = now;
     if (paused_)
-      wake = now + 0.05;
+      wake = std::min(next_output_due(), now + 0.05);  // rod_state keeps its rate while paused
     else if (pacer_.paced())
       wake = std::min(next_output_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
