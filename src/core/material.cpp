@@ -27,8 +27,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 // kappa is the Timoshenko shear stiffness G A of a circular section (model-notes.md); the paper's
 // printed kappa values were tuned under its r^2 inertia and would be far too stiff here.
-Material from_moduli(double E, double G, double Es, double rho, double radius,
-                     double retardation_time) {
+Material from_moduli(double E, double G, double Es, double rho, double radius, double tau_t,
+                     double tau_r) {
   Material m;
   m.youngs_modulus = E;
   m.shear_modulus = G;
@@ -36,9 +36,12 @@ Material from_moduli(double E, double G, double Es, double rho, double radius,
   m.density = rho;
   const double area = kPi * radius * radius;
   m.kappa = G * area;
-  // Kelvin-Voigt internal friction: every mode of frequency w gets damping ratio w * tau / 2.
-  m.gamma_t = retardation_time * Es * area;
-  m.gamma_r = retardation_time * E * area * radius * radius / 4.0;
+  // Kelvin-Voigt internal friction: a mode of frequency w gets damping ratio w * tau / 2. Explicit
+  // integration stays stable while h tau w^2 < 2, so the presets' retardation times are about
+  // 0.1 / w_max at a typical element length: they calm the highest (numerical) modes without
+  // lowering the stable step much, and leave the slow shape modes almost undamped.
+  m.gamma_t = tau_t * Es * area;
+  m.gamma_r = tau_r * E * area * radius * radius / 4.0;
   return m;
 }
 
@@ -75,32 +78,32 @@ const std::vector<MaterialPreset>& material_presets() {
     // The paper's Table 2 moduli, density and radius, with the physical section formulas.
     p.push_back({"paper_rope",
                  "CoRdE Table 2 rope: E = G = 0.5 MPa, E_s = 20 MPa, rho = 1300, r = 1 cm; "
-                 "kappa = G A; internal friction with 1 ms retardation time",
-                 from_moduli(0.5e6, 0.5e6, 20e6, 1300, 0.01, 1e-3), 0.01});
+                 "kappa = G A; retardation 40 us stretch, 10 us bend/twist (elements of 10 cm)",
+                 from_moduli(0.5e6, 0.5e6, 20e6, 1300, 0.01, 4e-5, 1e-5), 0.01});
     p.push_back({"paper_wire",
                  "CoRdE Table 2 wire: E = 200 MPa, G = 100 MPa, E_s = 100 MPa, rho = 7860, "
-                 "r = 1 mm (printed MPa: 1000x softer than steel); kappa = G A; 0.1 ms retardation",
-                 from_moduli(200e6, 100e6, 100e6, 7860, 0.001, 1e-4), 0.001});
+                 "r = 1 mm (printed MPa: 1000x softer than steel); kappa = G A; retardation 1 us (elements of 2 mm)",
+                 from_moduli(200e6, 100e6, 100e6, 7860, 0.001, 1e-6, 1e-6), 0.001});
     p.push_back({"paper_thread",
                  "CoRdE Table 2 thread: E = G = 10 Pa, E_s = 20 kPa, rho = 1300, r = 1 mm; "
-                 "kappa = G A; 10 ms retardation (limp, strongly damped like the paper's Fig. 7)",
-                 from_moduli(10, 10, 0.02e6, 1300, 0.001, 1e-2), 0.001});
+                 "kappa = G A; retardation 0.1 ms stretch, 1 ms bend/twist (elements of 1 cm)",
+                 from_moduli(10, 10, 0.02e6, 1300, 0.001, 1e-4, 1e-3), 0.001});
     // Real materials, handbook values (solid sections unless noted).
     p.push_back({"steel_wire",
                  "Spring steel wire: E = 200 GPa, G = 79 GPa (nu = 0.27), rho = 7850 "
-                 "(handbook values); r = 0.5 mm; 10 us retardation",
-                 from_moduli(200e9, 79e9, 200e9, 7850, 0.0005, 1e-5), 0.0005});
+                 "(handbook values); r = 0.5 mm; retardation 0.1 us (elements of 1 cm)",
+                 from_moduli(200e9, 79e9, 200e9, 7850, 0.0005, 1e-7, 1e-7), 0.0005});
     p.push_back({"nylon_rope",
                  "Braided nylon rope, r = 5 mm: effective axial modulus 1 GPa (fibre 2-4 GPa, "
                  "braid elongation ~10% at working load), bending modulus 20 MPa and shear 7 MPa "
                  "(loose braid bends far more easily than its fibres), rho = 800 (nylon 1140 "
-                 "at ~70% packing); 1 ms retardation",
-                 from_moduli(20e6, 7e6, 1e9, 800, 0.005, 1e-3), 0.005});
+                 "at ~70% packing); retardation 1 us stretch, 10 us bend/twist (elements of 2 cm)",
+                 from_moduli(20e6, 7e6, 1e9, 800, 0.005, 1e-6, 1e-5), 0.005});
     p.push_back({"soft_cable",
                  "PVC-insulated electrical cable, r = 3 mm: bending modulus 30 MPa (B ~ 2e-3 "
                  "N m^2, a limp power cord), shear 10 MPa, axial 5 GPa carried by the copper "
-                 "strands (~5% of the section at 120 GPa), rho = 2000; 1 ms retardation",
-                 from_moduli(30e6, 10e6, 5e9, 2000, 0.003, 1e-3), 0.003});
+                 "strands (~5% of the section at 120 GPa), rho = 2000; retardation 0.5 us stretch, 10 us bend/twist (elements of 2 cm)",
+                 from_moduli(30e6, 10e6, 5e9, 2000, 0.003, 5e-7, 1e-5), 0.003});
     return p;
   }();
   return presets;
