@@ -14,9 +14,50 @@ namespace {
   throw std::invalid_argument("parameter ~" + name + ": " + why);
 }
 
+bool take(const XmlRpc::XmlRpcValue& x, double& v) {
+  if (x.getType() == XmlRpc::XmlRpcValue::TypeInt)
+    v = static_cast<int>(x);
+  else if (x.getType() == XmlRpc::XmlRpcValue::TypeDouble)
+    v = static_cast<double>(x);
+  else
+    return false;
+  return true;
+}
+bool take(const XmlRpc::XmlRpcValue& x, int& v) {
+  if (x.getType() != XmlRpc::XmlRpcValue::TypeInt) return false;  // no silent 2.5 -> 2
+  v = static_cast<int>(x);
+  return true;
+}
+bool take(const XmlRpc::XmlRpcValue& x, bool& v) {
+  if (x.getType() != XmlRpc::XmlRpcValue::TypeBoolean) return false;
+  v = static_cast<bool>(x);
+  return true;
+}
+bool take(const XmlRpc::XmlRpcValue& x, std::string& v) {
+  if (x.getType() != XmlRpc::XmlRpcValue::TypeString) return false;
+  v = static_cast<std::string>(x);
+  return true;
+}
+const char* type_name(const double&) { return "a number"; }
+const char* type_name(const int&) { return "an integer"; }
+const char* type_name(const bool&) { return "true or false"; }
+const char* type_name(const std::string&) { return "a string"; }
+
+// Like NodeHandle::param, but a value of the wrong type is an error instead of the default
+// (roscpp would also cut 2.5 to an integer 2).
+template <class T>
+void read(const ros::NodeHandle& pnh, const std::string& name, T& value, const T& def) {
+  XmlRpc::XmlRpcValue x;
+  if (!pnh.getParam(name, x)) {
+    value = def;
+    return;
+  }
+  if (!take(x, value)) bad(name, std::string("must be ") + type_name(value));
+}
+
 double read_rate(const ros::NodeHandle& pnh, const std::string& name, double def) {
   double v = def;
-  pnh.param(name, v, def);
+  read(pnh, name, v, def);
   if (!std::isfinite(v) || v < 0.0 || v > 10000.0)
     bad(name, "must be a rate in Hz in [0, 10000] (0 = off), got " + num(v));
   return v;
@@ -53,7 +94,7 @@ const char* to_string(GraspSource s) {
 NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
                             const std::string& default_scene) {
   NodeParams p;
-  pnh.param<std::string>("scene", p.scene, default_scene);
+  read<std::string>(pnh, "scene", p.scene, default_scene);
   if (p.scene.empty()) bad("scene", "no scene file given and the package path is unknown");
 
   // ~overrides: a list of "key.path=value" strings, or one string with ';' between them.
@@ -80,52 +121,52 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
     }
   }
 
-  pnh.param<std::string>("world_frame", p.world_frame, "world");
+  read<std::string>(pnh, "world_frame", p.world_frame, "world");
   check_frame("world_frame", p.world_frame, false);
 
   // Default prefix: the namespace without its leading slash, so /sim1 draws sim1/cable/seg_0.
   std::string def_prefix = ns;
   while (!def_prefix.empty() && def_prefix.front() == '/') def_prefix.erase(0, 1);
   if (!def_prefix.empty() && def_prefix.back() != '/') def_prefix += '/';
-  pnh.param<std::string>("frame_prefix", p.frame_prefix, def_prefix);
+  read<std::string>(pnh, "frame_prefix", p.frame_prefix, def_prefix);
   check_frame("frame_prefix", p.frame_prefix, true);
   if (!p.frame_prefix.empty() && p.frame_prefix.back() != '/') p.frame_prefix += '/';
 
-  pnh.param("real_time_factor", p.real_time_factor, 1.0);
+  read(pnh, "real_time_factor", p.real_time_factor, 1.0);
   if (!std::isfinite(p.real_time_factor) || p.real_time_factor < 0.0 || p.real_time_factor > 1e6)
     bad("real_time_factor",
         "must be >= 0 (0 = as fast as possible), got " + num(p.real_time_factor));
-  pnh.param("publish_clock", p.publish_clock, false);
+  read(pnh, "publish_clock", p.publish_clock, false);
 
   p.tf_rate = read_rate(pnh, "tf_rate", 50.0);
   p.marker_rate = read_rate(pnh, "marker_rate", 20.0);
   p.state_rate = read_rate(pnh, "state_rate", 50.0);
   p.loop_rate = read_rate(pnh, "loop_rate", 200.0);
   if (p.loop_rate < 1.0) bad("loop_rate", "must be >= 1 Hz");
-  pnh.param("tf_every_k", p.tf_every_k, 1);
+  read(pnh, "tf_every_k", p.tf_every_k, 1);
   if (p.tf_every_k < 1)
     bad("tf_every_k", "must be an integer >= 1, got " + std::to_string(p.tf_every_k));
 
   std::string style;
-  pnh.param<std::string>("marker_style", style, "cylinders");
+  read<std::string>(pnh, "marker_style", style, "cylinders");
   if (style == "cylinders")
     p.marker_style = MarkerStyle::kCylinders;
   else if (style == "line_strip")
     p.marker_style = MarkerStyle::kLineStrip;
   else
     bad("marker_style", "must be line_strip or cylinders, got '" + style + "'");
-  pnh.param("show_frames", p.show_frames, false);
-  pnh.param("color_by_strain", p.color_by_strain, true);
-  pnh.param("marker_min_diameter", p.marker_min_diameter, 0.004);
+  read(pnh, "show_frames", p.show_frames, false);
+  read(pnh, "color_by_strain", p.color_by_strain, true);
+  read(pnh, "marker_min_diameter", p.marker_min_diameter, 0.004);
   if (!std::isfinite(p.marker_min_diameter) || p.marker_min_diameter < 0.0 ||
       p.marker_min_diameter > 1.0)
     bad("marker_min_diameter", "must be in [0, 1] m");
 
-  pnh.param("max_pose_age", p.max_pose_age, 1.0);
+  read(pnh, "max_pose_age", p.max_pose_age, 1.0);
   if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
     bad("max_pose_age", "must be > 0 s, got " + num(p.max_pose_age));
-  pnh.param("start_paused", p.start_paused, false);
-  pnh.param("benchmark", p.benchmark, 0.0);
+  read(pnh, "start_paused", p.start_paused, false);
+  read(pnh, "benchmark", p.benchmark, 0.0);
   if (!std::isfinite(p.benchmark) || p.benchmark < 0.0) bad("benchmark", "must be >= 0 s");
 
   XmlRpc::XmlRpcValue grasps;
@@ -136,13 +177,13 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
       const std::string key = "grasps/" + it->first;
       GraspSourceParam g;
       std::string source = "topic";
-      pnh.param<std::string>(key + "/source", source, "topic");
+      read<std::string>(pnh, key + "/source", source, "topic");
       try {
         g.source = parse_grasp_source(source);
       } catch (const std::invalid_argument& e) {
         bad(key + "/source", e.what());
       }
-      pnh.param<std::string>(key + "/frame", g.frame, "");
+      read<std::string>(pnh, key + "/frame", g.frame, "");
       if (g.source == GraspSource::kTf) check_frame(key + "/frame", g.frame, false);
       p.grasps[it->first] = g;
     }

@@ -1,0 +1,80 @@
+#!/usr/bin/python3
+# (Debian's python3 on purpose: it has rospy and the generated messages.)
+"""Start-up refusals of corde_sim_node (startup_params.test): each bad parameter makes it exit
+with a non-zero status and a message naming the parameter; good ones start it."""
+import os
+import signal
+import subprocess
+import time
+import unittest
+
+import roslib.packages
+import rospy
+import rostest
+
+# (private parameter arguments, text the output must contain)
+BAD = [
+    (["_publish_clock:=true"], "publish_clock"),  # /use_sim_time is not true
+    (["_tf_every_k:=0"], "tf_every_k"),
+    (["_real_time_factor:=-1.0"], "real_time_factor"),
+    (["_tf_rate:=-5.0"], "tf_rate"),
+    (["_tf_rate:=fast"], "tf_rate"),  # wrong type
+    (["_tf_every_k:=2.5"], "tf_every_k"),  # not an integer
+    (["_show_frames:=maybe"], "show_frames"),  # not a bool
+    (["_max_pose_age:=0.0"], "max_pose_age"),
+    (["_world_frame:=/world"], "world_frame"),
+    (["_marker_style:=spaghetti"], "marker_style"),
+    (["_scene:=/no/such/scene.yaml"], "scene"),
+    (["_overrides:=rods.0.elements=-4"], "elements"),
+    (["_grasps/gripper/source:=magic"], "grasps/gripper/source"),
+]
+
+
+def start(name, args, scene):
+    # roslib finds the node where roslaunch does; rosrun skips <package>/build, where ours is.
+    cmd = [roslib.packages.find_node("corde_sim", "corde_sim_node")[0], "__name:=" + name]
+    if not any(a.startswith("_scene:=") for a in args):
+        cmd.append("_scene:=" + scene)
+    # Own process group, so that ending it also ends rosrun's child.
+    return subprocess.Popen(cmd + args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, start_new_session=True)
+
+
+def stop(p):
+    if p.poll() is None:
+        os.killpg(p.pid, signal.SIGINT)
+        try:
+            p.wait(10)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+
+
+class StartupParams(unittest.TestCase):
+    def test_bad_parameters_refuse_start(self):
+        rospy.init_node("startup_params_test")
+        self.assertFalse(rospy.get_param("/use_sim_time", False))
+        scene = rospy.get_param("~scene")
+        procs = [(start("bad%d" % i, args, scene), args, what) for i, (args, what) in enumerate(BAD)]
+        good = start("good", [], scene)
+        try:
+            end = time.monotonic() + 30.0
+            for p, args, what in procs:
+                try:
+                    out, _ = p.communicate(timeout=max(1.0, end - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    stop(p)
+                    self.fail("%s: the node started instead of refusing" % args)
+                self.assertNotEqual(p.returncode, 0, "%s: exit status 0\n%s" % (args, out))
+                self.assertIn(what, out, "%s: the message does not name it" % args)
+                self.assertIn("cannot start", out, args)
+            # The same command with good parameters runs (and is still running now).
+            self.assertIsNone(good.poll(), "the node with good parameters exited")
+        finally:
+            for p, _, _ in procs:
+                stop(p)
+            stop(good)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("corde_sim", "startup_params", StartupParams)
