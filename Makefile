@@ -16,8 +16,8 @@ PYTHON     ?= /usr/bin/python3
 CMAKE_ARGS ?=
 CTEST_ARGS ?=
 BENCH_ARGS ?=
-# The main job. Later: the ROS node, e.g. roslaunch corde_sim sim.launch
-RUN_CMD    ?= ./$(BUILD_DIR)/corde_run config/scenes/default.yaml
+# The main job: the node on its default scene, with rviz when a display is there (DISPLAY set).
+RUN_CMD    ?= roslaunch corde_sim corde_sim.launch headless:=$(if $(DISPLAY),false,true)
 
 # Puts the package on ROS_PACKAGE_PATH (rostest, roslaunch) when the ROS part was built. ROS
 # python nodes start with `#!/usr/bin/env python3`: put the system python3 (which has rospy)

@@ -166,6 +166,9 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
     bad("max_pose_age", "must be > 0 s, got " + num(p.max_pose_age));
   read(pnh, "start_paused", p.start_paused, false);
+  read(pnh, "status_period", p.status_period, 10.0);
+  if (!std::isfinite(p.status_period) || p.status_period < 0.0)
+    bad("status_period", "must be >= 0 s (0 = no status lines), got " + num(p.status_period));
   read(pnh, "benchmark", p.benchmark, 0.0);
   if (!std::isfinite(p.benchmark) || p.benchmark < 0.0) bad("benchmark", "must be >= 0 s");
 

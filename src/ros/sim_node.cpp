@@ -352,6 +352,16 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("recoveries from non-finite state", recoveries_);
 }
 
+// A line a user watching the console (make run) can follow without rqt or rostopic.
+void SimNode::log_status() const {
+  ROS_INFO(
+      "corde_sim: t = %.3f s, %lu steps of %g s, real-time factor %.3g (target %g%s), "
+      "%.2f us/step, h/h_crit %.2f%s",
+      sim_time(), steps_total_, world_.time_step, measured_rtf_, params_.real_time_factor,
+      params_.real_time_factor > 0.0 ? "" : " = max", step_time_us_, stability_margin_,
+      paused_ ? ", paused" : "");
+}
+
 int SimNode::run() {
   ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
   double now = wall_seconds();
@@ -373,6 +383,10 @@ int SimNode::run() {
     now = wall_seconds();
     publish_due(now, false);
     diagnostics_->update();
+    if (params_.status_period > 0.0 && now >= next_status_) {
+      if (next_status_ > 0.0) log_status();  // none at start: nothing has run yet
+      next_status_ = now + params_.status_period;
+    }
     const double out_wall = wall_seconds() - now;
     output_wall_total += out_wall;
     output_wall_max = std::max(output_wall_max, out_wall);

@@ -22,6 +22,7 @@ BAD = [
     (["_tf_every_k:=2.5"], "tf_every_k"),  # not an integer
     (["_show_frames:=maybe"], "show_frames"),  # not a bool
     (["_max_pose_age:=0.0"], "max_pose_age"),
+    (["_status_period:=-1.0"], "status_period"),
     (["_world_frame:=/world"], "world_frame"),
     (["_marker_style:=spaghetti"], "marker_style"),
     (["_scene:=/no/such/scene.yaml"], "scene"),

@@ -38,7 +38,8 @@ struct NodeParams {
   double max_pose_age = 1.0;           // s
   double loop_rate = 200.0;            // Hz: wake-ups of the paced loop
   bool start_paused = false;
-  double benchmark = 0.0;  // s of wall time; > 0 runs, prints timings and exits
+  double status_period = 10.0;  // s of wall time between status lines in the log; 0 = none
+  double benchmark = 0.0;       // s of wall time; > 0 runs, prints timings and exits
   std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame}
 };
 

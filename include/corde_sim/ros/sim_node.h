@@ -114,6 +114,7 @@ class SimNode {
   void publish_clock();
   void update_stats(double now);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  void log_status() const;
   void update_stability();
   void bump_time();
   ros::Time stamp() const;
@@ -150,7 +151,7 @@ class SimNode {
   double last_clock_ = -1.0, last_tf_time_ = -1.0;
 
   // Output deadlines (steady-clock seconds).
-  double next_tf_ = 0.0, next_marker_ = 0.0, next_stats_ = 0.0;
+  double next_tf_ = 0.0, next_marker_ = 0.0, next_stats_ = 0.0, next_status_ = 0.0;
 
   ros::Publisher tf_pub_, marker_pub_, state_pub_, clock_pub_;
   ros::Subscriber tf_sub_, tf_static_sub_;
