@@ -29,7 +29,9 @@ packages=(
   # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
   python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
   python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
-  # command-line checks of the node (rostopic echo, rosservice call, tf_echo)
+  # rostests in python (test/ros/*_test.py) and command-line checks of the node (rostopic echo,
+  # rosservice call, tf_echo)
+  python3-numpy python3-std-msgs python3-geometry-msgs python3-tf2-msgs python3-rosgraph-msgs
   python3-std-srvs python3-diagnostic-msgs python3-visualization-msgs python3-tf2-ros tf-tools
   # visualisation: rviz, headless X server with software OpenGL, screenshots, charts
   rviz librviz-dev xvfb xauth libgl1-mesa-dri x11-utils imagemagick python3-matplotlib
