@@ -87,16 +87,35 @@ class Rod {
 
  private:
   void update_mass_and_inertia();
+  // The step's passes (rod.cpp): forces and torques at t into f_, tau_; the integrator.
+  void internal_forces();
+  void assemble(double t, const Vec3& gravity);
+  void integrate(double h);
   void apply_drives(double t_end, double h);
 
   std::string name_;
   Section section_;
   std::vector<Vec3> x_, v_, f_;
   std::vector<Quat> q_;
-  std::vector<Vec3> w_, tau_, w_world_;
+  std::vector<Vec3> w_, tau_;
   std::vector<double> rest_, rest_elem_, mass_, inv_mass_;
   std::vector<Vec3> inertia_, uhat_;
-  std::vector<unsigned char> node_kinematic_, seg_kinematic_;
+
+  // Constants precomputed from the rest lengths and the section (the step divides by nothing of
+  // them), one array each so that the step's loops read unit-stride streams and vectorise.
+  // Segment s: 1/l_s, gamma_t/l_s, kappa l_s; element j (segments j, j + 1): l_j, 1/l_j,
+  // gamma_r/l_j; the inverse body inertia (3 per segment).
+  std::vector<double> inv_rest_, gamma_t_inv_rest_, kappa_rest_;
+  std::vector<double> inv_rest_elem_, gamma_r_inv_rest_elem_, inv_inertia_;
+  // 1 for integrated nodes and segments, 0 for kinematic ones: the integrator multiplies its
+  // increments by them instead of branching, which keeps its loops vectorisable.
+  std::vector<double> node_free_, seg_free_;
+  // Per-step scratch, sized with the rod (the step allocates nothing). Arrays indexed with a
+  // shift of one have a zero (or the ghost frame's term) in front, so the end elements need no
+  // special case: fs_[s + 1] stretch/coupling force of segment s; ww_ world angular velocities;
+  // tc_ coupling body torques (2 per segment, the third is 0); ta_[s], tb_[s] bending torques on
+  // segment s from the element after and before it; tw_[s + 1] world friction torque of element s.
+  std::vector<double> fs_, ww_, tc_, ta_, tb_, tw_;
   std::vector<NodeDrive> node_drives_;
   std::vector<SegmentDrive> segment_drives_;
   std::vector<Load> loads_;

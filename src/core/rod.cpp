@@ -16,10 +16,15 @@ Rod::Rod(std::string name, std::vector<Vec3> nodes, std::vector<Quat> frames,
   f_.assign(n + 1, Vec3::Zero());
   w_.assign(n, Vec3::Zero());
   tau_.assign(n, Vec3::Zero());
-  w_world_.assign(n, Vec3::Zero());
   uhat_.assign(n - 1, Vec3::Zero());
-  node_kinematic_.assign(n + 1, 0);
-  seg_kinematic_.assign(n, 0);
+  node_free_.assign(n + 1, 1.0);
+  seg_free_.assign(n, 1.0);
+  fs_.assign(3 * (n + 2), 0.0);
+  ww_.assign(3 * n, 0.0);
+  tc_.assign(2 * n, 0.0);
+  ta_.assign(3 * n, 0.0);
+  tb_.assign(3 * n, 0.0);
+  tw_.assign(3 * (n + 1), 0.0);
   for (auto& q : q_) q.normalize();
   // Same hemisphere for neighbours keeps strains continuous (darboux() handles flips too).
   for (size_t s = 1; s < n; ++s)
@@ -54,10 +59,26 @@ void Rod::update_mass_and_inertia() {
     const double m = section_.mass_per_length * rest_[s];
     mass_[s] += 0.5 * m;
     mass_[s + 1] += 0.5 * m;
-    inertia_[s] = Vec3(section_.inertia_bend, section_.inertia_bend, section_.inertia_twist) *
-                  rest_[s];
+    inertia_[s] =
+        Vec3(section_.inertia_bend, section_.inertia_bend, section_.inertia_twist) * rest_[s];
   }
   for (size_t i = 0; i <= n; ++i) inv_mass_[i] = 1.0 / mass_[i];
+  inv_rest_.resize(n);
+  gamma_t_inv_rest_.resize(n);
+  kappa_rest_.resize(n);
+  inv_inertia_.resize(3 * n);
+  for (size_t s = 0; s < n; ++s) {
+    inv_rest_[s] = 1.0 / rest_[s];
+    gamma_t_inv_rest_[s] = section_.gamma_t / rest_[s];
+    kappa_rest_[s] = section_.kappa * rest_[s];
+    for (int k = 0; k < 3; ++k) inv_inertia_[3 * s + k] = 1.0 / inertia_[s][k];
+  }
+  inv_rest_elem_.resize(n - 1);
+  gamma_r_inv_rest_elem_.resize(n - 1);
+  for (size_t j = 0; j + 1 < n; ++j) {
+    inv_rest_elem_[j] = 1.0 / rest_elem_[j];
+    gamma_r_inv_rest_elem_[j] = section_.gamma_r / rest_elem_[j];
+  }
 }
 
 void Rod::set_rest_strains_from_state() {
@@ -69,7 +90,7 @@ void Rod::add_node_drive(const NodeDrive& d) {
     throw std::out_of_range("rod '" + name_ + "': no node " + std::to_string(d.node));
   remove_node_drive(d.node);
   node_drives_.push_back(d);
-  node_kinematic_[d.node] = 1;
+  node_free_[d.node] = 0.0;
 }
 
 void Rod::add_segment_drive(const SegmentDrive& d) {
@@ -77,7 +98,7 @@ void Rod::add_segment_drive(const SegmentDrive& d) {
     throw std::out_of_range("rod '" + name_ + "': no segment " + std::to_string(d.segment));
   remove_segment_drive(d.segment);
   segment_drives_.push_back(d);
-  seg_kinematic_[d.segment] = 1;
+  seg_free_[d.segment] = 0.0;
 }
 
 bool Rod::remove_node_drive(int node) {
@@ -85,7 +106,7 @@ bool Rod::remove_node_drive(int node) {
                          [&](const NodeDrive& d) { return d.node == node; });
   if (it == node_drives_.end()) return false;
   node_drives_.erase(it);
-  node_kinematic_[node] = 0;
+  node_free_[node] = 1.0;
   return true;
 }
 
@@ -94,7 +115,7 @@ bool Rod::remove_segment_drive(int segment) {
                          [&](const SegmentDrive& d) { return d.segment == segment; });
   if (it == segment_drives_.end()) return false;
   segment_drives_.erase(it);
-  seg_kinematic_[segment] = 0;
+  seg_free_[segment] = 1.0;
   return true;
 }
 
@@ -112,90 +133,243 @@ SegmentDrive* Rod::segment_drive(int segment) {
 
 namespace {
 
-// Body torques on the two frames of a bending element from its strain error (see
-// bend_twist_energy for the gradients): with r = conj(a) b and sigma = sign(a.b),
-// tau_a = (sigma/l) vec(r (x) e) and tau_b = -(sigma/l) vec(conj(r) (x) e), e = l K (u - uhat).
-inline void bend_element(const Quat& a, const Quat& b, double rest, const Vec3& k,
-                         const Vec3& uhat, Vec3* tau_a, Vec3* tau_b) {
-  const Quat r = a.conjugate() * b;
-  const double sigma = r.w() < 0.0 ? -1.0 : 1.0;
-  const double inv_l = 1.0 / rest;
-  const Vec3 u = (2.0 * sigma * inv_l) * r.vec();
-  const Vec3 e = rest * k.cwiseProduct(u - uhat);
-  if (tau_a) *tau_a += (sigma * inv_l) * mul_pure(r, e).vec();
-  if (tau_b) *tau_b -= (sigma * inv_l) * mul_pure(r.conjugate(), e).vec();
+// The step reads the state vectors as packed doubles (x, y, z per Vec3; x, y, z, w per Quat).
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+static_assert(sizeof(Quat) == 4 * sizeof(double), "Quat must be four packed doubles");
+
+// Rotation matrix of the unit quaternion q = (x, y, z, w), the same formulas as Eigen's
+// toRotationMatrix(). Columns are the directors d1, d2, d3.
+struct Rotation {
+  double m00, m01, m02, m10, m11, m12, m20, m21, m22;
+};
+inline Rotation rotation(const double* q) {
+  const double tx = 2.0 * q[0], ty = 2.0 * q[1], tz = 2.0 * q[2];
+  const double twx = tx * q[3], twy = ty * q[3], twz = tz * q[3];
+  const double txx = tx * q[0], txy = ty * q[0], txz = tz * q[0];
+  const double tyy = ty * q[1], tyz = tz * q[1], tzz = tz * q[2];
+  return {1.0 - (tyy + tzz), txy - twz,         txz + twy,  //
+          txy + twz,         1.0 - (txx + tzz), tyz - twx,  //
+          txz - twy,         tyz + twx,         1.0 - (txx + tyy)};
+}
+
+// Bending and twist element between the frames a and b (quaternions as x, y, z, w; rest length l,
+// inv_l = 1/l, stiffness (kb, kb, kt) = (B, B, C), rest strain uhat). Writes the body torque on a
+// to ta and on b to tb. With r = conj(a) (x) b and sigma = sign(r_w) (q and -q give the same
+// strain), the strain is u = (2 sigma / l) vec(r) and e = l K (u - uhat) = dV/du. The gradients are
+// the products of a and b with the pure quaternion e (signed permutations of e, eq. 6), which as
+// body torques become tau_a = (sigma/l) vec(r (x) e) = (sigma/l) (r_w e + vec(r) x e) and tau_b =
+// -(sigma/l) vec(conj(r) (x) e) = -(sigma/l) (r_w e - vec(r) x e): one cross product serves both
+// frames, and no 4x4 product is formed.
+inline void bend_element(const double* a, const double* b, double l, double inv_l, double kb,
+                         double kt, const double* uhat, double* ta, double* tb) {
+  const double rw = a[3] * b[3] + a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const double rx = a[3] * b[0] - b[3] * a[0] - (a[1] * b[2] - a[2] * b[1]);
+  const double ry = a[3] * b[1] - b[3] * a[1] - (a[2] * b[0] - a[0] * b[2]);
+  const double rz = a[3] * b[2] - b[3] * a[2] - (a[0] * b[1] - a[1] * b[0]);
+  const double sigma = rw < 0.0 ? -1.0 : 1.0;
+  const double su = 2.0 * sigma * inv_l;
+  const double ex = l * (kb * (su * rx - uhat[0]));
+  const double ey = l * (kb * (su * ry - uhat[1]));
+  const double ez = l * (kt * (su * rz - uhat[2]));
+  const double cx = ry * ez - rz * ey, cy = rz * ex - rx * ez, cz = rx * ey - ry * ex;
+  const double g = sigma * inv_l;
+  ta[0] = g * (rw * ex + cx);
+  ta[1] = g * (rw * ey + cy);
+  ta[2] = g * (rw * ez + cz);
+  tb[0] = -g * (rw * ex - cx);
+  tb[1] = -g * (rw * ey - cy);
+  tb[2] = -g * (rw * ez - cz);
+}
+
+// The passes of Rod::internal_forces over flat arrays. Each is a plain loop without branches or
+// values carried between iterations, which the compiler vectorises. They stay out of line: GCC 12
+// no longer vectorises them once inlined into the member function.
+[[gnu::noinline]] void segment_pass(int n, const double* __restrict x, const double* __restrict v,
+                                    const double* __restrict q, const double* __restrict w,
+                                    const double* __restrict inv_rest,
+                                    const double* __restrict gamma_t_inv_rest,
+                                    const double* __restrict kappa_rest, double ks,
+                                    double* __restrict fs, double* __restrict ww,
+                                    double* __restrict tc) {
+  // Segments: stretch (eq. 24) with translational friction (eq. 29) along the tangent, the
+  // coupling penalty (eq. 33) and its body torque l kappa (e_z x R^T t) = l kappa (-d2.t, d1.t, 0),
+  // and the world angular velocity for the rotational friction.
+  for (int s = 0; s < n; ++s) {
+    const Rotation r = rotation(q + 4 * s);
+    const double* ws = w + 3 * s;
+    ww[3 * s + 0] = r.m00 * ws[0] + r.m01 * ws[1] + r.m02 * ws[2];
+    ww[3 * s + 1] = r.m10 * ws[0] + r.m11 * ws[1] + r.m12 * ws[2];
+    ww[3 * s + 2] = r.m20 * ws[0] + r.m21 * ws[1] + r.m22 * ws[2];
+    const double drx = x[3 * s + 3] - x[3 * s], dry = x[3 * s + 4] - x[3 * s + 1],
+                 drz = x[3 * s + 5] - x[3 * s + 2];
+    const double len = std::sqrt(drx * drx + dry * dry + drz * drz);
+    const double inv_len = 1.0 / len;
+    const double tx = drx * inv_len, ty = dry * inv_len, tz = drz * inv_len;
+    const double dvx = v[3 * s + 3] - v[3 * s], dvy = v[3 * s + 4] - v[3 * s + 1],
+                 dvz = v[3 * s + 5] - v[3 * s + 2];
+    const double axial =
+        ks * (len * inv_rest[s] - 1.0) + gamma_t_inv_rest[s] * (tx * dvx + ty * dvy + tz * dvz);
+    const double diffx = tx - r.m02, diffy = ty - r.m12, diffz = tz - r.m22;
+    const double t_diff = tx * diffx + ty * diffy + tz * diffz;
+    const double c = kappa_rest[s] * inv_len;
+    fs[3 * s + 3] = axial * tx + c * (diffx - tx * t_diff);
+    fs[3 * s + 4] = axial * ty + c * (diffy - ty * t_diff);
+    fs[3 * s + 5] = axial * tz + c * (diffz - tz * t_diff);
+    tc[2 * s + 0] = -kappa_rest[s] * (r.m01 * tx + r.m11 * ty + r.m21 * tz);
+    tc[2 * s + 1] = kappa_rest[s] * (r.m00 * tx + r.m10 * ty + r.m20 * tz);
+  }
+}
+
+[[gnu::noinline]] void element_pass(int n, const double* __restrict q,
+                                    const double* __restrict uhat,
+                                    const double* __restrict rest_elem,
+                                    const double* __restrict inv_rest_elem,
+                                    const double* __restrict gamma_r_inv_rest_elem, double kb,
+                                    double kt, const double* __restrict ww, double* __restrict ta,
+                                    double* __restrict tb, double* __restrict tw) {
+  // Elements: bending and twist, and rotational friction (eq. 30) on the world angular velocity
+  // difference, tw_j = gamma_r / l_j (ww_{j+1} - ww_j), + on segment j and - on segment j + 1.
+  for (int j = 0; j + 1 < n; ++j) {
+    bend_element(q + 4 * j, q + 4 * j + 4, rest_elem[j], inv_rest_elem[j], kb, kt, uhat + 3 * j,
+                 ta + 3 * j, tb + 3 * j + 3);
+    for (int c = 0; c < 3; ++c)
+      tw[3 * j + 3 + c] = gamma_r_inv_rest_elem[j] * (ww[3 * j + 3 + c] - ww[3 * j + c]);
+  }
+}
+
+[[gnu::noinline]] void torque_pass(int n, const double* __restrict q, const double* __restrict tc,
+                                   const double* __restrict ta, const double* __restrict tb,
+                                   const double* __restrict tw, double* __restrict tau) {
+  // Segments: total body torque; the friction torques of both neighbouring elements share one
+  // R^T product.
+  for (int s = 0; s < n; ++s) {
+    const Rotation r = rotation(q + 4 * s);
+    const double dx = tw[3 * s + 3] - tw[3 * s], dy = tw[3 * s + 4] - tw[3 * s + 1],
+                 dz = tw[3 * s + 5] - tw[3 * s + 2];
+    tau[3 * s + 0] = tc[2 * s] + ta[3 * s] + tb[3 * s] + (r.m00 * dx + r.m10 * dy + r.m20 * dz);
+    tau[3 * s + 1] =
+        tc[2 * s + 1] + ta[3 * s + 1] + tb[3 * s + 1] + (r.m01 * dx + r.m11 * dy + r.m21 * dz);
+    tau[3 * s + 2] = ta[3 * s + 2] + tb[3 * s + 2] + (r.m02 * dx + r.m12 * dy + r.m22 * dz);
+  }
 }
 
 }  // namespace
 
-void Rod::compute_forces(double t, const Vec3& gravity) {
+// Internal forces and torques: segments (stretch, coupling, world angular velocities), elements
+// (bending, twist, rotational friction), the ends, then the segments' total torques. Each frame's
+// rotation matrix is rebuilt from its quaternion where needed (cheaper than storing it).
+void Rod::internal_forces() {
   const int n = num_segments();
-  const Section& sec = section_;
-  for (int i = 0; i <= n; ++i) f_[i] = mass_[i] * gravity;
-  for (int s = 0; s < n; ++s) {
-    tau_[s].setZero();
-    w_world_[s] = q_[s] * w_[s];
+  const double* q = q_.data()->coeffs().data();
+  double* ta = ta_.data();
+  double* tb = tb_.data();
+  segment_pass(n, x_.data()->data(), v_.data()->data(), q, w_.data()->data(), inv_rest_.data(),
+               gamma_t_inv_rest_.data(), kappa_rest_.data(), section_.stretch, fs_.data(),
+               ww_.data(), tc_.data());
+  const double kb = section_.bend, kt = section_.twist;
+  element_pass(n, q, n > 1 ? uhat_.data()->data() : nullptr, rest_elem_.data(),
+               inv_rest_elem_.data(), gamma_r_inv_rest_elem_.data(), kb, kt, ww_.data(), ta, tb,
+               tw_.data());
+  // The ends: ghost-frame clamps or nothing (tw_ keeps zeros at both ends).
+  double unused[3];
+  const double zero[3] = {0.0, 0.0, 0.0};
+  if (ghost_[0].active)
+    bend_element(ghost_[0].frame.coeffs().data(), q, 0.5 * rest_[0], 2.0 / rest_[0], kb, kt,
+                 ghost_[0].uhat.data(), unused, tb);
+  else
+    std::copy(zero, zero + 3, tb);
+  if (ghost_[1].active)
+    bend_element(q + 4 * (n - 1), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
+                 2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta + 3 * (n - 1), unused);
+  else
+    std::copy(zero, zero + 3, ta + 3 * (n - 1));
+
+  torque_pass(n, q, tc_.data(), ta, tb, tw_.data(), tau_.data()->data());
+}
+
+// Node forces (gravity and the segments on both sides) and the loads.
+void Rod::assemble(double t, const Vec3& gravity) {
+  const int n = num_segments();
+  const double* __restrict fs = fs_.data();
+  const double* __restrict mass = mass_.data();
+  double* __restrict f = f_.data()->data();
+  const double gx = gravity.x(), gy = gravity.y(), gz = gravity.z();
+  for (int i = 0; i <= n; ++i) {
+    f[3 * i + 0] = mass[i] * gx + (fs[3 * i + 3] - fs[3 * i + 0]);
+    f[3 * i + 1] = mass[i] * gy + (fs[3 * i + 4] - fs[3 * i + 1]);
+    f[3 * i + 2] = mass[i] * gz + (fs[3 * i + 5] - fs[3 * i + 2]);
   }
   for (const Load& l : loads_) {
-    const double k = l.scale(t);
-    if (k == 0.0) continue;
+    const double scale = l.scale(t);
+    if (scale == 0.0) continue;
     if (l.kind == Load::Kind::kForce)
-      f_[l.index] += k * l.value;
+      f_[l.index] += scale * l.value;
     else
-      tau_[l.index] += q_[l.index].conjugate() * (k * l.value);
+      tau_[l.index] += q_[l.index].conjugate() * (scale * l.value);
   }
+}
+
+void Rod::compute_forces(double t, const Vec3& gravity) {
+  internal_forces();
+  assemble(t, gravity);
+}
+
+// Semi-implicit Euler (eqs. 37-42). Kinematic nodes and segments get increments multiplied by 0
+// (exactly their old state) instead of a branch, so both loops vectorise.
+void Rod::integrate(double h) {
+  const int n = num_segments();
+  const double* __restrict f = f_.data()->data();
+  const double* __restrict inv_mass = inv_mass_.data();
+  const double* __restrict node_free = node_free_.data();
+  double* __restrict x = x_.data()->data();
+  double* __restrict v = v_.data()->data();
+  for (int i = 0; i <= n; ++i) {
+    const double hm = h * inv_mass[i] * node_free[i], hx = h * node_free[i];
+    for (int c = 0; c < 3; ++c) {
+      v[3 * i + c] += hm * f[3 * i + c];
+      x[3 * i + c] += hx * v[3 * i + c];
+    }
+  }
+
+  const double* __restrict tau = tau_.data()->data();
+  const double* __restrict inertia = inertia_.data()->data();
+  const double* __restrict inv_inertia = inv_inertia_.data();
+  const double* __restrict seg_free = seg_free_.data();
+  double* __restrict w = w_.data()->data();
+  double* __restrict q = q_.data()->coeffs().data();
   for (int s = 0; s < n; ++s) {
-    const Vec3 dr = x_[s + 1] - x_[s];
-    const double len = dr.norm();
-    const Vec3 t = dr / len;
-    const double rest = rest_[s];
-    // Stretch (eq. 24) and translational internal friction (eq. 29) act along t.
-    const Vec3 dv = v_[s + 1] - v_[s];
-    const double axial = sec.stretch * (len / rest - 1.0) + sec.gamma_t / rest * t.dot(dv);
-    // Coupling penalty (eq. 33).
-    const Eigen::Matrix3d rot = q_[s].toRotationMatrix();
-    const Vec3 diff = t - rot.col(2);
-    const double c = rest * sec.kappa;
-    const Vec3 fc = (c / len) * (diff - t * t.dot(diff));
-    const Vec3 fs = axial * t + fc;
-    f_[s] += fs;
-    f_[s + 1] -= fs;
-    tau_[s] += coupling_torque(rot.transpose() * t, rest, sec.kappa);
+    const double* in = inertia + 3 * s;
+    double* ws = w + 3 * s;
+    const double wx = ws[0], wy = ws[1], wz = ws[2];
+    const double lx = in[0] * wx, ly = in[1] * wy, lz = in[2] * wz;  // body angular momentum
+    const double hf = h * seg_free[s];
+    const double nx = wx + (hf * (tau[3 * s + 0] - (wy * lz - wz * ly))) * inv_inertia[3 * s + 0];
+    const double ny = wy + (hf * (tau[3 * s + 1] - (wz * lx - wx * lz))) * inv_inertia[3 * s + 1];
+    const double nz = wz + (hf * (tau[3 * s + 2] - (wx * ly - wy * lx))) * inv_inertia[3 * s + 2];
+    ws[0] = nx;
+    ws[1] = ny;
+    ws[2] = nz;
+    // q + q (x) (0, h w / 2), then normalised (a kinematic segment keeps q: scale 1).
+    const double a = 0.5 * hf;
+    const double hx = a * nx, hy = a * ny, hz = a * nz;
+    double* qs = q + 4 * s;
+    const double qx = qs[0], qy = qs[1], qz = qs[2], qw = qs[3];
+    const double px = qx + (qw * hx + qy * hz - qz * hy);
+    const double py = qy + (qw * hy + qz * hx - qx * hz);
+    const double pz = qz + (qw * hz + qx * hy - qy * hx);
+    const double pw = qw - (qx * hx + qy * hy + qz * hz);
+    const double inv_norm = 1.0 / std::sqrt(px * px + py * py + pz * pz + pw * pw);
+    const double scale = seg_free[s] * inv_norm + (1.0 - seg_free[s]);
+    qs[0] = px * scale;
+    qs[1] = py * scale;
+    qs[2] = pz * scale;
+    qs[3] = pw * scale;
   }
-  const Vec3 k(sec.bend, sec.bend, sec.twist);
-  for (int j = 0; j + 1 < n; ++j) {
-    const double rest = rest_elem_[j];
-    bend_element(q_[j], q_[j + 1], rest, k, uhat_[j], &tau_[j], &tau_[j + 1]);
-    // Rotational internal friction (eq. 30) on the world-frame angular velocity difference.
-    const Vec3 tw = (sec.gamma_r / rest) * (w_world_[j + 1] - w_world_[j]);
-    tau_[j] += q_[j].conjugate() * tw;
-    tau_[j + 1] -= q_[j + 1].conjugate() * tw;
-  }
-  if (ghost_[0].active)
-    bend_element(ghost_[0].frame, q_[0], 0.5 * rest_[0], k, ghost_[0].uhat, nullptr, &tau_[0]);
-  if (ghost_[1].active)
-    bend_element(q_[n - 1], ghost_[1].frame, 0.5 * rest_[n - 1], k, ghost_[1].uhat,
-                 &tau_[n - 1], nullptr);
 }
 
 void Rod::step(double t, double h, const Vec3& gravity) {
   compute_forces(t, gravity);
-  const int n = num_segments();
-  for (int i = 0; i <= n; ++i) {
-    if (node_kinematic_[i]) continue;
-    v_[i] += (h * inv_mass_[i]) * f_[i];
-    x_[i] += h * v_[i];
-  }
-  for (int s = 0; s < n; ++s) {
-    if (seg_kinematic_[s]) continue;
-    const Vec3& inertia = inertia_[s];
-    Vec3& w = w_[s];
-    w += h * (tau_[s] - w.cross(inertia.cwiseProduct(w))).cwiseQuotient(inertia);
-    Quat& q = q_[s];
-    const Quat dq = mul_pure(q, 0.5 * h * w);
-    q.coeffs() += dq.coeffs();
-    q.normalize();
-  }
+  integrate(h);
   apply_drives(t + h, h);
 }
 
@@ -261,8 +435,8 @@ Energies Rod::energies(const Vec3& gravity) const {
     e.coupling += coupling_energy(dr, q_[s], rest_[s], section_.kappa, nullptr, nullptr);
   }
   for (int j = 0; j + 1 < n; ++j)
-    e.bend_twist += bend_twist_energy(q_[j], q_[j + 1], rest_elem_[j], k, uhat_[j], nullptr,
-                                      nullptr);
+    e.bend_twist +=
+        bend_twist_energy(q_[j], q_[j + 1], rest_elem_[j], k, uhat_[j], nullptr, nullptr);
   if (ghost_[0].active)
     e.bend_twist += bend_twist_energy(ghost_[0].frame, q_[0], 0.5 * rest_[0], k, ghost_[0].uhat,
                                       nullptr, nullptr);
