@@ -181,16 +181,29 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
   tb[2] = -g * (rw * ez - cz);
 }
 
+// x86-64: the hot loops are also compiled for AVX2 (x86-64-v3) and AVX-512 (x86-64-v4), picked at
+// load time for the CPU at hand, so the build itself stays portable (no -march). rod.cpp is built
+// with -ffp-contract=off so that the variants do not fuse a * b + c; GCC 12 still turns a few
+// alternating add/sub lanes into fmaddsub there, so results may differ from the baseline variant
+// in the last bits. -DCORDE_NO_VECTOR_CLONES builds the baseline variant only.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(CORDE_NO_VECTOR_CLONES)
+#define CORDE_VECTOR_CLONES \
+  [[gnu::noinline, gnu::target_clones("default", "arch=x86-64-v3", "arch=x86-64-v4")]]
+#else
+#define CORDE_VECTOR_CLONES [[gnu::noinline]]
+#endif
+
 // The passes of Rod::internal_forces over flat arrays. Each is a plain loop without branches or
 // values carried between iterations, which the compiler vectorises. They stay out of line: GCC 12
 // no longer vectorises them once inlined into the member function.
-[[gnu::noinline]] void segment_pass(int n, const double* __restrict x, const double* __restrict v,
-                                    const double* __restrict q, const double* __restrict w,
-                                    const double* __restrict inv_rest,
-                                    const double* __restrict gamma_t_inv_rest,
-                                    const double* __restrict kappa_rest, double ks,
-                                    double* __restrict fs, double* __restrict ww,
-                                    double* __restrict tc) {
+CORDE_VECTOR_CLONES void segment_pass(int n, const double* __restrict x, const double* __restrict v,
+                                      const double* __restrict q, const double* __restrict w,
+                                      const double* __restrict inv_rest,
+                                      const double* __restrict gamma_t_inv_rest,
+                                      const double* __restrict kappa_rest, double ks,
+                                      double* __restrict fs, double* __restrict ww,
+                                      double* __restrict tc) {
   // Segments: stretch (eq. 24) with translational friction (eq. 29) along the tangent, the
   // coupling penalty (eq. 33) and its body torque l kappa (e_z x R^T t) = l kappa (-d2.t, d1.t, 0),
   // and the world angular velocity for the rotational friction.
@@ -220,13 +233,13 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
   }
 }
 
-[[gnu::noinline]] void element_pass(int n, const double* __restrict q,
-                                    const double* __restrict uhat,
-                                    const double* __restrict rest_elem,
-                                    const double* __restrict inv_rest_elem,
-                                    const double* __restrict gamma_r_inv_rest_elem, double kb,
-                                    double kt, const double* __restrict ww, double* __restrict ta,
-                                    double* __restrict tb, double* __restrict tw) {
+CORDE_VECTOR_CLONES void element_pass(int n, const double* __restrict q,
+                                      const double* __restrict uhat,
+                                      const double* __restrict rest_elem,
+                                      const double* __restrict inv_rest_elem,
+                                      const double* __restrict gamma_r_inv_rest_elem, double kb,
+                                      double kt, const double* __restrict ww, double* __restrict ta,
+                                      double* __restrict tb, double* __restrict tw) {
   // Elements: bending and twist, and rotational friction (eq. 30) on the world angular velocity
   // difference, tw_j = gamma_r / l_j (ww_{j+1} - ww_j), + on segment j and - on segment j + 1.
   for (int j = 0; j + 1 < n; ++j) {
@@ -237,9 +250,9 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
   }
 }
 
-[[gnu::noinline]] void torque_pass(int n, const double* __restrict q, const double* __restrict tc,
-                                   const double* __restrict ta, const double* __restrict tb,
-                                   const double* __restrict tw, double* __restrict tau) {
+CORDE_VECTOR_CLONES void torque_pass(int n, const double* __restrict q, const double* __restrict tc,
+                                     const double* __restrict ta, const double* __restrict tb,
+                                     const double* __restrict tw, double* __restrict tau) {
   // Segments: total body torque; the friction torques of both neighbouring elements share one
   // R^T product.
   for (int s = 0; s < n; ++s) {
@@ -250,6 +263,66 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
     tau[3 * s + 1] =
         tc[2 * s + 1] + ta[3 * s + 1] + tb[3 * s + 1] + (r.m01 * dx + r.m11 * dy + r.m21 * dz);
     tau[3 * s + 2] = ta[3 * s + 2] + tb[3 * s + 2] + (r.m02 * dx + r.m12 * dy + r.m22 * dz);
+  }
+}
+
+CORDE_VECTOR_CLONES void node_force_pass(int n, const double* __restrict fs,
+                                         const double* __restrict mass, double gx, double gy,
+                                         double gz, double* __restrict f) {
+  for (int i = 0; i <= n; ++i) {
+    f[3 * i + 0] = mass[i] * gx + (fs[3 * i + 3] - fs[3 * i + 0]);
+    f[3 * i + 1] = mass[i] * gy + (fs[3 * i + 4] - fs[3 * i + 1]);
+    f[3 * i + 2] = mass[i] * gz + (fs[3 * i + 5] - fs[3 * i + 2]);
+  }
+}
+
+// Semi-implicit Euler (eqs. 37-42). Kinematic nodes and segments get increments multiplied by 0
+// (exactly their old state) instead of a branch, so the loops vectorise.
+CORDE_VECTOR_CLONES void node_integrate_pass(int n, double h, const double* __restrict f,
+                                             const double* __restrict inv_mass,
+                                             const double* __restrict node_free,
+                                             double* __restrict x, double* __restrict v) {
+  for (int i = 0; i <= n; ++i) {
+    const double hm = h * inv_mass[i] * node_free[i], hx = h * node_free[i];
+    for (int c = 0; c < 3; ++c) {
+      v[3 * i + c] += hm * f[3 * i + c];
+      x[3 * i + c] += hx * v[3 * i + c];
+    }
+  }
+}
+
+CORDE_VECTOR_CLONES void segment_integrate_pass(int n, double h, const double* __restrict tau,
+                                                const double* __restrict inertia,
+                                                const double* __restrict inv_inertia,
+                                                const double* __restrict seg_free,
+                                                double* __restrict w, double* __restrict q) {
+  for (int s = 0; s < n; ++s) {
+    const double* in = inertia + 3 * s;
+    double* ws = w + 3 * s;
+    const double wx = ws[0], wy = ws[1], wz = ws[2];
+    const double lx = in[0] * wx, ly = in[1] * wy, lz = in[2] * wz;  // body angular momentum
+    const double hf = h * seg_free[s];
+    const double nx = wx + (hf * (tau[3 * s + 0] - (wy * lz - wz * ly))) * inv_inertia[3 * s + 0];
+    const double ny = wy + (hf * (tau[3 * s + 1] - (wz * lx - wx * lz))) * inv_inertia[3 * s + 1];
+    const double nz = wz + (hf * (tau[3 * s + 2] - (wx * ly - wy * lx))) * inv_inertia[3 * s + 2];
+    ws[0] = nx;
+    ws[1] = ny;
+    ws[2] = nz;
+    // q + q (x) (0, h w / 2), then normalised (a kinematic segment keeps q: scale 1).
+    const double a = 0.5 * hf;
+    const double hx = a * nx, hy = a * ny, hz = a * nz;
+    double* qs = q + 4 * s;
+    const double qx = qs[0], qy = qs[1], qz = qs[2], qw = qs[3];
+    const double px = qx + (qw * hx + qy * hz - qz * hy);
+    const double py = qy + (qw * hy + qz * hx - qx * hz);
+    const double pz = qz + (qw * hz + qx * hy - qy * hx);
+    const double pw = qw - (qx * hx + qy * hy + qz * hz);
+    const double inv_norm = 1.0 / std::sqrt(px * px + py * py + pz * pz + pw * pw);
+    const double scale = seg_free[s] * inv_norm + (1.0 - seg_free[s]);
+    qs[0] = px * scale;
+    qs[1] = py * scale;
+    qs[2] = pz * scale;
+    qs[3] = pw * scale;
   }
 }
 
@@ -289,16 +362,8 @@ void Rod::internal_forces() {
 
 // Node forces (gravity and the segments on both sides) and the loads.
 void Rod::assemble(double t, const Vec3& gravity) {
-  const int n = num_segments();
-  const double* __restrict fs = fs_.data();
-  const double* __restrict mass = mass_.data();
-  double* __restrict f = f_.data()->data();
-  const double gx = gravity.x(), gy = gravity.y(), gz = gravity.z();
-  for (int i = 0; i <= n; ++i) {
-    f[3 * i + 0] = mass[i] * gx + (fs[3 * i + 3] - fs[3 * i + 0]);
-    f[3 * i + 1] = mass[i] * gy + (fs[3 * i + 4] - fs[3 * i + 1]);
-    f[3 * i + 2] = mass[i] * gz + (fs[3 * i + 5] - fs[3 * i + 2]);
-  }
+  node_force_pass(num_segments(), fs_.data(), mass_.data(), gravity.x(), gravity.y(), gravity.z(),
+                  f_.data()->data());
   for (const Load& l : loads_) {
     const double scale = l.scale(t);
     if (scale == 0.0) continue;
@@ -314,57 +379,12 @@ void Rod::compute_forces(double t, const Vec3& gravity) {
   assemble(t, gravity);
 }
 
-// Semi-implicit Euler (eqs. 37-42). Kinematic nodes and segments get increments multiplied by 0
-// (exactly their old state) instead of a branch, so both loops vectorise.
 void Rod::integrate(double h) {
   const int n = num_segments();
-  const double* __restrict f = f_.data()->data();
-  const double* __restrict inv_mass = inv_mass_.data();
-  const double* __restrict node_free = node_free_.data();
-  double* __restrict x = x_.data()->data();
-  double* __restrict v = v_.data()->data();
-  for (int i = 0; i <= n; ++i) {
-    const double hm = h * inv_mass[i] * node_free[i], hx = h * node_free[i];
-    for (int c = 0; c < 3; ++c) {
-      v[3 * i + c] += hm * f[3 * i + c];
-      x[3 * i + c] += hx * v[3 * i + c];
-    }
-  }
-
-  const double* __restrict tau = tau_.data()->data();
-  const double* __restrict inertia = inertia_.data()->data();
-  const double* __restrict inv_inertia = inv_inertia_.data();
-  const double* __restrict seg_free = seg_free_.data();
-  double* __restrict w = w_.data()->data();
-  double* __restrict q = q_.data()->coeffs().data();
-  for (int s = 0; s < n; ++s) {
-    const double* in = inertia + 3 * s;
-    double* ws = w + 3 * s;
-    const double wx = ws[0], wy = ws[1], wz = ws[2];
-    const double lx = in[0] * wx, ly = in[1] * wy, lz = in[2] * wz;  // body angular momentum
-    const double hf = h * seg_free[s];
-    const double nx = wx + (hf * (tau[3 * s + 0] - (wy * lz - wz * ly))) * inv_inertia[3 * s + 0];
-    const double ny = wy + (hf * (tau[3 * s + 1] - (wz * lx - wx * lz))) * inv_inertia[3 * s + 1];
-    const double nz = wz + (hf * (tau[3 * s + 2] - (wx * ly - wy * lx))) * inv_inertia[3 * s + 2];
-    ws[0] = nx;
-    ws[1] = ny;
-    ws[2] = nz;
-    // q + q (x) (0, h w / 2), then normalised (a kinematic segment keeps q: scale 1).
-    const double a = 0.5 * hf;
-    const double hx = a * nx, hy = a * ny, hz = a * nz;
-    double* qs = q + 4 * s;
-    const double qx = qs[0], qy = qs[1], qz = qs[2], qw = qs[3];
-    const double px = qx + (qw * hx + qy * hz - qz * hy);
-    const double py = qy + (qw * hy + qz * hx - qx * hz);
-    const double pz = qz + (qw * hz + qx * hy - qy * hx);
-    const double pw = qw - (qx * hx + qy * hy + qz * hz);
-    const double inv_norm = 1.0 / std::sqrt(px * px + py * py + pz * pz + pw * pw);
-    const double scale = seg_free[s] * inv_norm + (1.0 - seg_free[s]);
-    qs[0] = px * scale;
-    qs[1] = py * scale;
-    qs[2] = pz * scale;
-    qs[3] = pw * scale;
-  }
+  node_integrate_pass(n, h, f_.data()->data(), inv_mass_.data(), node_free_.data(),
+                      x_.data()->data(), v_.data()->data());
+  segment_integrate_pass(n, h, tau_.data()->data(), inertia_.data()->data(), inv_inertia_.data(),
+                         seg_free_.data(), w_.data()->data(), q_.data()->coeffs().data());
 }
 
 void Rod::step(double t, double h, const Vec3& gravity) {
