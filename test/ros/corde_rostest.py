@@ -112,8 +112,9 @@ class Sim:
         """Pauses and returns a state published after the pause took effect."""
         r = self.pause(True)
         assert r.success, r.message
-        s = self.fresh_state()
-        assert s is not None and s.paused
+        # A state published just before the pause may still be in flight: wait for a paused one.
+        s = self.state.last(WAIT, since=time.monotonic(), pred=lambda m: m.paused)
+        assert s is not None, "no paused rod_state within %g s" % WAIT
         return s
 
 

@@ -29,7 +29,8 @@ class PauseStep(unittest.TestCase):
         self.assertTrue(r.success)
         self.assertIn("paused", r.message)
         self.assertTrue(self.sim.pause(True).success)  # pausing twice is harmless
-        first = self.sim.fresh_state()
+        # (a state published just before the pause may still be in flight)
+        first = self.sim.state.last(ct.WAIT, since=time.monotonic(), pred=lambda m: m.paused)
         since = time.monotonic()
         time.sleep(1.0)
         states = self.sim.state.messages(since)
