@@ -87,10 +87,11 @@ class Rod {
 
  private:
   void update_mass_and_inertia();
-  // The step's passes (rod.cpp): forces and torques at t into f_, tau_; the integrator.
-  void internal_forces();
-  void assemble(double t, const Vec3& gravity);
-  void integrate(double h);
+  // The step's passes (rod.cpp), over blocks of segments [b0, b1): the ghost-frame torques at
+  // the ends; forces and torques at t into f_, tau_; the integrator.
+  void end_torques();
+  void forces_block(int b0, int b1, double t, const Vec3& gravity);
+  void integrate_block(int b0, int b1, double h);
   void apply_drives(double t_end, double h);
 
   std::string name_;

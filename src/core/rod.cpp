@@ -197,9 +197,9 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
 // The passes of Rod::internal_forces over flat arrays. Each is a plain loop without branches or
 // values carried between iterations, which the compiler vectorises. They stay out of line: GCC 12
 // no longer vectorises them once inlined into the member function.
-CORDE_VECTOR_CLONES void segment_pass(int n, const double* __restrict x, const double* __restrict v,
-                                      const double* __restrict q, const double* __restrict w,
-                                      const double* __restrict inv_rest,
+CORDE_VECTOR_CLONES void segment_pass(int s0, int s1, const double* __restrict x,
+                                      const double* __restrict v, const double* __restrict q,
+                                      const double* __restrict w, const double* __restrict inv_rest,
                                       const double* __restrict gamma_t_inv_rest,
                                       const double* __restrict kappa_rest, double ks,
                                       double* __restrict fs, double* __restrict ww,
@@ -207,7 +207,7 @@ CORDE_VECTOR_CLONES void segment_pass(int n, const double* __restrict x, const d
   // Segments: stretch (eq. 24) with translational friction (eq. 29) along the tangent, the
   // coupling penalty (eq. 33) and its body torque l kappa (e_z x R^T t) = l kappa (-d2.t, d1.t, 0),
   // and the world angular velocity for the rotational friction.
-  for (int s = 0; s < n; ++s) {
+  for (int s = s0; s < s1; ++s) {
     const Rotation r = rotation(q + 4 * s);
     const double* ws = w + 3 * s;
     ww[3 * s + 0] = r.m00 * ws[0] + r.m01 * ws[1] + r.m02 * ws[2];
@@ -233,7 +233,7 @@ CORDE_VECTOR_CLONES void segment_pass(int n, const double* __restrict x, const d
   }
 }
 
-CORDE_VECTOR_CLONES void element_pass(int n, const double* __restrict q,
+CORDE_VECTOR_CLONES void element_pass(int j0, int j1, const double* __restrict q,
                                       const double* __restrict uhat,
                                       const double* __restrict rest_elem,
                                       const double* __restrict inv_rest_elem,
@@ -242,7 +242,7 @@ CORDE_VECTOR_CLONES void element_pass(int n, const double* __restrict q,
                                       double* __restrict tb, double* __restrict tw) {
   // Elements: bending and twist, and rotational friction (eq. 30) on the world angular velocity
   // difference, tw_j = gamma_r / l_j (ww_{j+1} - ww_j), + on segment j and - on segment j + 1.
-  for (int j = 0; j + 1 < n; ++j) {
+  for (int j = j0; j < j1; ++j) {
     bend_element(q + 4 * j, q + 4 * j + 4, rest_elem[j], inv_rest_elem[j], kb, kt, uhat + 3 * j,
                  ta + 3 * j, tb + 3 * j + 3);
     for (int c = 0; c < 3; ++c)
@@ -250,12 +250,13 @@ CORDE_VECTOR_CLONES void element_pass(int n, const double* __restrict q,
   }
 }
 
-CORDE_VECTOR_CLONES void torque_pass(int n, const double* __restrict q, const double* __restrict tc,
-                                     const double* __restrict ta, const double* __restrict tb,
-                                     const double* __restrict tw, double* __restrict tau) {
+CORDE_VECTOR_CLONES void torque_pass(int s0, int s1, const double* __restrict q,
+                                     const double* __restrict tc, const double* __restrict ta,
+                                     const double* __restrict tb, const double* __restrict tw,
+                                     double* __restrict tau) {
   // Segments: total body torque; the friction torques of both neighbouring elements share one
   // R^T product.
-  for (int s = 0; s < n; ++s) {
+  for (int s = s0; s < s1; ++s) {
     const Rotation r = rotation(q + 4 * s);
     const double dx = tw[3 * s + 3] - tw[3 * s], dy = tw[3 * s + 4] - tw[3 * s + 1],
                  dz = tw[3 * s + 5] - tw[3 * s + 2];
@@ -266,10 +267,10 @@ CORDE_VECTOR_CLONES void torque_pass(int n, const double* __restrict q, const do
   }
 }
 
-CORDE_VECTOR_CLONES void node_force_pass(int n, const double* __restrict fs,
+CORDE_VECTOR_CLONES void node_force_pass(int i0, int i1, const double* __restrict fs,
                                          const double* __restrict mass, double gx, double gy,
                                          double gz, double* __restrict f) {
-  for (int i = 0; i <= n; ++i) {
+  for (int i = i0; i < i1; ++i) {
     f[3 * i + 0] = mass[i] * gx + (fs[3 * i + 3] - fs[3 * i + 0]);
     f[3 * i + 1] = mass[i] * gy + (fs[3 * i + 4] - fs[3 * i + 1]);
     f[3 * i + 2] = mass[i] * gz + (fs[3 * i + 5] - fs[3 * i + 2]);
@@ -278,11 +279,11 @@ CORDE_VECTOR_CLONES void node_force_pass(int n, const double* __restrict fs,
 
 // Semi-implicit Euler (eqs. 37-42). Kinematic nodes and segments get increments multiplied by 0
 // (exactly their old state) instead of a branch, so the loops vectorise.
-CORDE_VECTOR_CLONES void node_integrate_pass(int n, double h, const double* __restrict f,
+CORDE_VECTOR_CLONES void node_integrate_pass(int i0, int i1, double h, const double* __restrict f,
                                              const double* __restrict inv_mass,
                                              const double* __restrict node_free,
                                              double* __restrict x, double* __restrict v) {
-  for (int i = 0; i <= n; ++i) {
+  for (int i = i0; i < i1; ++i) {
     const double hm = h * inv_mass[i] * node_free[i], hx = h * node_free[i];
     for (int c = 0; c < 3; ++c) {
       v[3 * i + c] += hm * f[3 * i + c];
@@ -291,12 +292,13 @@ CORDE_VECTOR_CLONES void node_integrate_pass(int n, double h, const double* __re
   }
 }
 
-CORDE_VECTOR_CLONES void segment_integrate_pass(int n, double h, const double* __restrict tau,
+CORDE_VECTOR_CLONES void segment_integrate_pass(int s0, int s1, double h,
+                                                const double* __restrict tau,
                                                 const double* __restrict inertia,
                                                 const double* __restrict inv_inertia,
                                                 const double* __restrict seg_free,
                                                 double* __restrict w, double* __restrict q) {
-  for (int s = 0; s < n; ++s) {
+  for (int s = s0; s < s1; ++s) {
     const double* in = inertia + 3 * s;
     double* ws = w + 3 * s;
     const double wx = ws[0], wy = ws[1], wz = ws[2];
@@ -326,70 +328,104 @@ CORDE_VECTOR_CLONES void segment_integrate_pass(int n, double h, const double* _
   }
 }
 
+// Segments per block of Rod::step. The passes run over one block of segments before moving on to
+// the next, so each block's state, constants and scratch (about 0.45 kB per segment) stay in the
+// per-core cache across the passes instead of streaming the whole rod through it six times.
+// 512 (about 230 kB) measured fastest of 128 to 1024 at N = 10000 on the benchmark machine.
+constexpr int kStepBlock = 512;
+
+// What is complete once segments [b0, b1) of n have been through the segment pass: elements up
+// to b1 - 2 (element j needs segments j and j + 1); torques and the segment integration one behind
+// (segment s needs elements s - 1 and s, and its old frame is read by element s); node forces and
+// the node integration up to b1 - 1 (node i needs segments i - 1 and i, node b1 is read by segment
+// b1). The last block finishes the rod.
+struct BlockRange {
+  int elem0, elem1, seg0, seg1, node0, node1;
+};
+inline BlockRange block_range(int b0, int b1, int n) {
+  const bool last = b1 == n;
+  return {std::max(b0 - 1, 0), b1 - 1, std::max(b0 - 1, 0),
+          last ? n : b1 - 1,   b0,     last ? n + 1 : b1};
+}
+
 }  // namespace
 
-// Internal forces and torques: segments (stretch, coupling, world angular velocities), elements
-// (bending, twist, rotational friction), the ends, then the segments' total torques. Each frame's
-// rotation matrix is rebuilt from its quaternion where needed (cheaper than storing it).
-void Rod::internal_forces() {
+// The ends: the bending torques of the ghost-frame clamps, or nothing. From the frames at the
+// start of the step, before any block is integrated (tw_ keeps zeros at both ends).
+void Rod::end_torques() {
   const int n = num_segments();
   const double* q = q_.data()->coeffs().data();
-  double* ta = ta_.data();
-  double* tb = tb_.data();
-  segment_pass(n, x_.data()->data(), v_.data()->data(), q, w_.data()->data(), inv_rest_.data(),
-               gamma_t_inv_rest_.data(), kappa_rest_.data(), section_.stretch, fs_.data(),
-               ww_.data(), tc_.data());
   const double kb = section_.bend, kt = section_.twist;
-  element_pass(n, q, n > 1 ? uhat_.data()->data() : nullptr, rest_elem_.data(),
-               inv_rest_elem_.data(), gamma_r_inv_rest_elem_.data(), kb, kt, ww_.data(), ta, tb,
-               tw_.data());
-  // The ends: ghost-frame clamps or nothing (tw_ keeps zeros at both ends).
   double unused[3];
   const double zero[3] = {0.0, 0.0, 0.0};
   if (ghost_[0].active)
     bend_element(ghost_[0].frame.coeffs().data(), q, 0.5 * rest_[0], 2.0 / rest_[0], kb, kt,
-                 ghost_[0].uhat.data(), unused, tb);
+                 ghost_[0].uhat.data(), unused, tb_.data());
   else
-    std::copy(zero, zero + 3, tb);
+    std::copy(zero, zero + 3, tb_.data());
   if (ghost_[1].active)
     bend_element(q + 4 * (n - 1), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
-                 2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta + 3 * (n - 1), unused);
+                 2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta_.data() + 3 * (n - 1),
+                 unused);
   else
-    std::copy(zero, zero + 3, ta + 3 * (n - 1));
-
-  torque_pass(n, q, tc_.data(), ta, tb, tw_.data(), tau_.data()->data());
+    std::copy(zero, zero + 3, ta_.data() + 3 * (n - 1));
 }
 
-// Node forces (gravity and the segments on both sides) and the loads.
-void Rod::assemble(double t, const Vec3& gravity) {
-  node_force_pass(num_segments(), fs_.data(), mass_.data(), gravity.x(), gravity.y(), gravity.z(),
+// Forces and torques of the items completed by segments [b0, b1) (block_range): segments
+// (stretch, coupling, world angular velocities), elements (bending, twist, rotational friction),
+// the segments' total torques, node forces (gravity and the segments on both sides) and the loads
+// on those nodes and segments. Each frame's rotation matrix is rebuilt from its quaternion where
+// needed (cheaper than storing it).
+void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
+  const int n = num_segments();
+  const BlockRange r = block_range(b0, b1, n);
+  const double* q = q_.data()->coeffs().data();
+  segment_pass(b0, b1, x_.data()->data(), v_.data()->data(), q, w_.data()->data(), inv_rest_.data(),
+               gamma_t_inv_rest_.data(), kappa_rest_.data(), section_.stretch, fs_.data(),
+               ww_.data(), tc_.data());
+  element_pass(r.elem0, r.elem1, q, n > 1 ? uhat_.data()->data() : nullptr, rest_elem_.data(),
+               inv_rest_elem_.data(), gamma_r_inv_rest_elem_.data(), section_.bend, section_.twist,
+               ww_.data(), ta_.data(), tb_.data(), tw_.data());
+  torque_pass(r.seg0, r.seg1, q, tc_.data(), ta_.data(), tb_.data(), tw_.data(),
+              tau_.data()->data());
+  node_force_pass(r.node0, r.node1, fs_.data(), mass_.data(), gravity.x(), gravity.y(), gravity.z(),
                   f_.data()->data());
   for (const Load& l : loads_) {
+    const bool force = l.kind == Load::Kind::kForce;
+    if (force ? (l.index < r.node0 || l.index >= r.node1) : (l.index < r.seg0 || l.index >= r.seg1))
+      continue;
     const double scale = l.scale(t);
     if (scale == 0.0) continue;
-    if (l.kind == Load::Kind::kForce)
+    if (force)
       f_[l.index] += scale * l.value;
     else
       tau_[l.index] += q_[l.index].conjugate() * (scale * l.value);
   }
 }
 
-void Rod::compute_forces(double t, const Vec3& gravity) {
-  internal_forces();
-  assemble(t, gravity);
+// Semi-implicit Euler of the nodes and segments completed by segments [b0, b1) (block_range).
+void Rod::integrate_block(int b0, int b1, double h) {
+  const BlockRange r = block_range(b0, b1, num_segments());
+  node_integrate_pass(r.node0, r.node1, h, f_.data()->data(), inv_mass_.data(), node_free_.data(),
+                      x_.data()->data(), v_.data()->data());
+  segment_integrate_pass(r.seg0, r.seg1, h, tau_.data()->data(), inertia_.data()->data(),
+                         inv_inertia_.data(), seg_free_.data(), w_.data()->data(),
+                         q_.data()->coeffs().data());
 }
 
-void Rod::integrate(double h) {
-  const int n = num_segments();
-  node_integrate_pass(n, h, f_.data()->data(), inv_mass_.data(), node_free_.data(),
-                      x_.data()->data(), v_.data()->data());
-  segment_integrate_pass(n, h, tau_.data()->data(), inertia_.data()->data(), inv_inertia_.data(),
-                         seg_free_.data(), w_.data()->data(), q_.data()->coeffs().data());
+void Rod::compute_forces(double t, const Vec3& gravity) {
+  end_torques();
+  forces_block(0, num_segments(), t, gravity);
 }
 
 void Rod::step(double t, double h, const Vec3& gravity) {
-  compute_forces(t, gravity);
-  integrate(h);
+  const int n = num_segments();
+  end_torques();
+  for (int b0 = 0; b0 < n; b0 += kStepBlock) {
+    const int b1 = std::min(b0 + kStepBlock, n);
+    forces_block(b0, b1, t, gravity);
+    integrate_block(b0, b1, h);
+  }
   apply_drives(t + h, h);
 }
 
