@@ -87,9 +87,8 @@ class Rod {
 
  private:
   void update_mass_and_inertia();
-  // The step's passes (rod.cpp), over blocks of segments [b0, b1): the ghost-frame torques at
-  // the ends; forces and torques at t into f_, tau_; the integrator.
-  void end_torques();
+  // The step's passes (rod.cpp), over blocks of segments [b0, b1): forces and torques at t into
+  // f_, tau_; the integrator.
   void forces_block(int b0, int b1, double t, const Vec3& gravity);
   void integrate_block(int b0, int b1, double h);
   void apply_drives(double t_end, double h);
@@ -111,11 +110,12 @@ class Rod {
   // 1 for integrated nodes and segments, 0 for kinematic ones: the integrator multiplies its
   // increments by them instead of branching, which keeps its loops vectorisable.
   std::vector<double> node_free_, seg_free_;
-  // Per-step scratch, sized with the rod (the step allocates nothing). Arrays indexed with a
-  // shift of one have a zero (or the ghost frame's term) in front, so the end elements need no
-  // special case: fs_[s + 1] stretch/coupling force of segment s; ww_ world angular velocities;
-  // tc_ coupling body torques (2 per segment, the third is 0); ta_[s], tb_[s] bending torques on
-  // segment s from the element after and before it; tw_[s + 1] world friction torque of element s.
+  // Per-step scratch for one block of segments (the step allocates nothing), indexed as for the
+  // whole rod less an offset per block (Rod::forces_block). Arrays indexed with a shift of one
+  // have a zero (or the ghost frame's term) in front, so the end elements need no special case:
+  // fs_[s + 1] stretch/coupling force of segment s; ww_ world angular velocities; tc_ coupling
+  // body torques (2 per segment, the third is 0); ta_[s], tb_[s] bending torques on segment s from
+  // the element after and before it; tw_[s + 1] world friction torque of element s.
   std::vector<double> fs_, ww_, tc_, ta_, tb_, tw_;
   std::vector<NodeDrive> node_drives_;
   std::vector<SegmentDrive> segment_drives_;

@@ -6,6 +6,15 @@
 
 namespace corde {
 
+namespace {
+// Segments per block of Rod::step and Rod::compute_forces. All passes run over one block before
+// the next, so the block's state and constants stay in the per-core cache across the six passes
+// instead of the whole rod being streamed through it six times; the scratch holds one block only
+// (no traffic to memory). 1024 measured best of 256 to 2048 (docs/benchmark.md); rods up to 1024
+// segments are one block, as before.
+constexpr int kStepBlock = 1024;
+}  // namespace
+
 Rod::Rod(std::string name, std::vector<Vec3> nodes, std::vector<Quat> frames,
          const Section& section)
     : name_(std::move(name)), section_(section), x_(std::move(nodes)), q_(std::move(frames)) {
@@ -19,12 +28,14 @@ Rod::Rod(std::string name, std::vector<Vec3> nodes, std::vector<Quat> frames,
   uhat_.assign(n - 1, Vec3::Zero());
   node_free_.assign(n + 1, 1.0);
   seg_free_.assign(n, 1.0);
-  fs_.assign(3 * (n + 2), 0.0);
-  ww_.assign(3 * n, 0.0);
-  tc_.assign(2 * n, 0.0);
-  ta_.assign(3 * n, 0.0);
-  tb_.assign(3 * n, 0.0);
-  tw_.assign(3 * (n + 1), 0.0);
+  // Scratch for one block of segments, with the items around it (rod.h, Rod::forces_block).
+  const size_t m = std::min<size_t>(n, kStepBlock);
+  fs_.assign(3 * (m + 3), 0.0);
+  ww_.assign(3 * (m + 1), 0.0);
+  tc_.assign(2 * (m + 1), 0.0);
+  ta_.assign(3 * (m + 1), 0.0);
+  tb_.assign(3 * (m + 1), 0.0);
+  tw_.assign(3 * (m + 2), 0.0);
   for (auto& q : q_) q.normalize();
   // Same hemisphere for neighbours keeps strains continuous (darboux() handles flips too).
   for (size_t s = 1; s < n; ++s)
@@ -197,7 +208,7 @@ inline void bend_element(const double* a, const double* b, double l, double inv_
 // The passes of Rod::internal_forces over flat arrays. Each is a plain loop without branches or
 // values carried between iterations, which the compiler vectorises. They stay out of line: GCC 12
 // no longer vectorises them once inlined into the member function.
-CORDE_VECTOR_CLONES void segment_pass(int s0, int s1, const double* __restrict x,
+CORDE_VECTOR_CLONES void segment_pass(int s0, int s1, int off, const double* __restrict x,
                                       const double* __restrict v, const double* __restrict q,
                                       const double* __restrict w, const double* __restrict inv_rest,
                                       const double* __restrict gamma_t_inv_rest,
@@ -208,11 +219,12 @@ CORDE_VECTOR_CLONES void segment_pass(int s0, int s1, const double* __restrict x
   // coupling penalty (eq. 33) and its body torque l kappa (e_z x R^T t) = l kappa (-d2.t, d1.t, 0),
   // and the world angular velocity for the rotational friction.
   for (int s = s0; s < s1; ++s) {
+    const int l = s - off;  // index into the block's scratch
     const Rotation r = rotation(q + 4 * s);
     const double* ws = w + 3 * s;
-    ww[3 * s + 0] = r.m00 * ws[0] + r.m01 * ws[1] + r.m02 * ws[2];
-    ww[3 * s + 1] = r.m10 * ws[0] + r.m11 * ws[1] + r.m12 * ws[2];
-    ww[3 * s + 2] = r.m20 * ws[0] + r.m21 * ws[1] + r.m22 * ws[2];
+    ww[3 * l + 0] = r.m00 * ws[0] + r.m01 * ws[1] + r.m02 * ws[2];
+    ww[3 * l + 1] = r.m10 * ws[0] + r.m11 * ws[1] + r.m12 * ws[2];
+    ww[3 * l + 2] = r.m20 * ws[0] + r.m21 * ws[1] + r.m22 * ws[2];
     const double drx = x[3 * s + 3] - x[3 * s], dry = x[3 * s + 4] - x[3 * s + 1],
                  drz = x[3 * s + 5] - x[3 * s + 2];
     const double len = std::sqrt(drx * drx + dry * dry + drz * drz);
@@ -225,15 +237,15 @@ CORDE_VECTOR_CLONES void segment_pass(int s0, int s1, const double* __restrict x
     const double diffx = tx - r.m02, diffy = ty - r.m12, diffz = tz - r.m22;
     const double t_diff = tx * diffx + ty * diffy + tz * diffz;
     const double c = kappa_rest[s] * inv_len;
-    fs[3 * s + 3] = axial * tx + c * (diffx - tx * t_diff);
-    fs[3 * s + 4] = axial * ty + c * (diffy - ty * t_diff);
-    fs[3 * s + 5] = axial * tz + c * (diffz - tz * t_diff);
-    tc[2 * s + 0] = -kappa_rest[s] * (r.m01 * tx + r.m11 * ty + r.m21 * tz);
-    tc[2 * s + 1] = kappa_rest[s] * (r.m00 * tx + r.m10 * ty + r.m20 * tz);
+    fs[3 * l + 3] = axial * tx + c * (diffx - tx * t_diff);
+    fs[3 * l + 4] = axial * ty + c * (diffy - ty * t_diff);
+    fs[3 * l + 5] = axial * tz + c * (diffz - tz * t_diff);
+    tc[2 * l + 0] = -kappa_rest[s] * (r.m01 * tx + r.m11 * ty + r.m21 * tz);
+    tc[2 * l + 1] = kappa_rest[s] * (r.m00 * tx + r.m10 * ty + r.m20 * tz);
   }
 }
 
-CORDE_VECTOR_CLONES void element_pass(int j0, int j1, const double* __restrict q,
+CORDE_VECTOR_CLONES void element_pass(int j0, int j1, int off, const double* __restrict q,
                                       const double* __restrict uhat,
                                       const double* __restrict rest_elem,
                                       const double* __restrict inv_rest_elem,
@@ -243,37 +255,40 @@ CORDE_VECTOR_CLONES void element_pass(int j0, int j1, const double* __restrict q
   // Elements: bending and twist, and rotational friction (eq. 30) on the world angular velocity
   // difference, tw_j = gamma_r / l_j (ww_{j+1} - ww_j), + on segment j and - on segment j + 1.
   for (int j = j0; j < j1; ++j) {
+    const int l = j - off;
     bend_element(q + 4 * j, q + 4 * j + 4, rest_elem[j], inv_rest_elem[j], kb, kt, uhat + 3 * j,
-                 ta + 3 * j, tb + 3 * j + 3);
+                 ta + 3 * l, tb + 3 * l + 3);
     for (int c = 0; c < 3; ++c)
-      tw[3 * j + 3 + c] = gamma_r_inv_rest_elem[j] * (ww[3 * j + 3 + c] - ww[3 * j + c]);
+      tw[3 * l + 3 + c] = gamma_r_inv_rest_elem[j] * (ww[3 * l + 3 + c] - ww[3 * l + c]);
   }
 }
 
-CORDE_VECTOR_CLONES void torque_pass(int s0, int s1, const double* __restrict q,
+CORDE_VECTOR_CLONES void torque_pass(int s0, int s1, int off, const double* __restrict q,
                                      const double* __restrict tc, const double* __restrict ta,
                                      const double* __restrict tb, const double* __restrict tw,
                                      double* __restrict tau) {
   // Segments: total body torque; the friction torques of both neighbouring elements share one
   // R^T product.
   for (int s = s0; s < s1; ++s) {
+    const int l = s - off;
     const Rotation r = rotation(q + 4 * s);
-    const double dx = tw[3 * s + 3] - tw[3 * s], dy = tw[3 * s + 4] - tw[3 * s + 1],
-                 dz = tw[3 * s + 5] - tw[3 * s + 2];
-    tau[3 * s + 0] = tc[2 * s] + ta[3 * s] + tb[3 * s] + (r.m00 * dx + r.m10 * dy + r.m20 * dz);
+    const double dx = tw[3 * l + 3] - tw[3 * l], dy = tw[3 * l + 4] - tw[3 * l + 1],
+                 dz = tw[3 * l + 5] - tw[3 * l + 2];
+    tau[3 * s + 0] = tc[2 * l] + ta[3 * l] + tb[3 * l] + (r.m00 * dx + r.m10 * dy + r.m20 * dz);
     tau[3 * s + 1] =
-        tc[2 * s + 1] + ta[3 * s + 1] + tb[3 * s + 1] + (r.m01 * dx + r.m11 * dy + r.m21 * dz);
-    tau[3 * s + 2] = ta[3 * s + 2] + tb[3 * s + 2] + (r.m02 * dx + r.m12 * dy + r.m22 * dz);
+        tc[2 * l + 1] + ta[3 * l + 1] + tb[3 * l + 1] + (r.m01 * dx + r.m11 * dy + r.m21 * dz);
+    tau[3 * s + 2] = ta[3 * l + 2] + tb[3 * l + 2] + (r.m02 * dx + r.m12 * dy + r.m22 * dz);
   }
 }
 
-CORDE_VECTOR_CLONES void node_force_pass(int i0, int i1, const double* __restrict fs,
+CORDE_VECTOR_CLONES void node_force_pass(int i0, int i1, int off, const double* __restrict fs,
                                          const double* __restrict mass, double gx, double gy,
                                          double gz, double* __restrict f) {
   for (int i = i0; i < i1; ++i) {
-    f[3 * i + 0] = mass[i] * gx + (fs[3 * i + 3] - fs[3 * i + 0]);
-    f[3 * i + 1] = mass[i] * gy + (fs[3 * i + 4] - fs[3 * i + 1]);
-    f[3 * i + 2] = mass[i] * gz + (fs[3 * i + 5] - fs[3 * i + 2]);
+    const int l = i - off;
+    f[3 * i + 0] = mass[i] * gx + (fs[3 * l + 3] - fs[3 * l + 0]);
+    f[3 * i + 1] = mass[i] * gy + (fs[3 * l + 4] - fs[3 * l + 1]);
+    f[3 * i + 2] = mass[i] * gz + (fs[3 * l + 5] - fs[3 * l + 2]);
   }
 }
 
@@ -328,12 +343,6 @@ CORDE_VECTOR_CLONES void segment_integrate_pass(int s0, int s1, double h,
   }
 }
 
-// Segments per block of Rod::step. The passes run over one block of segments before moving on to
-// the next, so each block's state, constants and scratch (about 0.45 kB per segment) stay in the
-// per-core cache across the passes instead of streaming the whole rod through it six times.
-// 512 (about 230 kB) measured fastest of 128 to 1024 at N = 10000 on the benchmark machine.
-constexpr int kStepBlock = 512;
-
 // What is complete once segments [b0, b1) of n have been through the segment pass: elements up
 // to b1 - 2 (element j needs segments j and j + 1); torques and the segment integration one behind
 // (segment s needs elements s - 1 and s, and its old frame is read by element s); node forces and
@@ -350,45 +359,62 @@ inline BlockRange block_range(int b0, int b1, int n) {
 
 }  // namespace
 
-// The ends: the bending torques of the ghost-frame clamps, or nothing. From the frames at the
-// start of the step, before any block is integrated (tw_ keeps zeros at both ends).
-void Rod::end_torques() {
-  const int n = num_segments();
-  const double* q = q_.data()->coeffs().data();
-  const double kb = section_.bend, kt = section_.twist;
-  double unused[3];
-  const double zero[3] = {0.0, 0.0, 0.0};
-  if (ghost_[0].active)
-    bend_element(ghost_[0].frame.coeffs().data(), q, 0.5 * rest_[0], 2.0 / rest_[0], kb, kt,
-                 ghost_[0].uhat.data(), unused, tb_.data());
-  else
-    std::copy(zero, zero + 3, tb_.data());
-  if (ghost_[1].active)
-    bend_element(q + 4 * (n - 1), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
-                 2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta_.data() + 3 * (n - 1),
-                 unused);
-  else
-    std::copy(zero, zero + 3, ta_.data() + 3 * (n - 1));
-}
-
 // Forces and torques of the items completed by segments [b0, b1) (block_range): segments
 // (stretch, coupling, world angular velocities), elements (bending, twist, rotational friction),
-// the segments' total torques, node forces (gravity and the segments on both sides) and the loads
-// on those nodes and segments. Each frame's rotation matrix is rebuilt from its quaternion where
-// needed (cheaper than storing it).
+// the ghost-frame clamps at the ends, the segments' total torques, node forces (gravity and the
+// segments on both sides) and the loads on those nodes and segments. Each frame's rotation matrix
+// is rebuilt from its quaternion where needed (cheaper than storing it).
 void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
   const int n = num_segments();
   const BlockRange r = block_range(b0, b1, n);
   const double* q = q_.data()->coeffs().data();
-  segment_pass(b0, b1, x_.data()->data(), v_.data()->data(), q, w_.data()->data(), inv_rest_.data(),
-               gamma_t_inv_rest_.data(), kappa_rest_.data(), section_.stretch, fs_.data(),
-               ww_.data(), tc_.data());
-  element_pass(r.elem0, r.elem1, q, n > 1 ? uhat_.data()->data() : nullptr, rest_elem_.data(),
-               inv_rest_elem_.data(), gamma_r_inv_rest_elem_.data(), section_.bend, section_.twist,
-               ww_.data(), ta_.data(), tb_.data(), tw_.data());
-  torque_pass(r.seg0, r.seg1, q, tc_.data(), ta_.data(), tb_.data(), tw_.data(),
-              tau_.data()->data());
-  node_force_pass(r.node0, r.node1, fs_.data(), mass_.data(), gravity.x(), gravity.y(), gravity.z(),
+  const double kb = section_.bend, kt = section_.twist;
+  // The scratch holds one block: item g of the rod (segment, element or slot, see rod.h) is at
+  // g - off.
+  const int off = b0 - 1;
+  double *fs = fs_.data(), *ww = ww_.data(), *tc = tc_.data();
+  double *ta = ta_.data(), *tb = tb_.data(), *tw = tw_.data();
+  if (b0 == 0) {
+    std::fill(fs, fs + 6, 0.0);  // nothing before segment 0 and element 0
+    std::fill(tw, tw + 6, 0.0);
+  } else {
+    // The previous block had kStepBlock segments, so the items of its last segment and element,
+    // which this block still reads, are kStepBlock further along: move them to the front.
+    const int k = kStepBlock;
+    std::copy(ww + 3 * k, ww + 3 * k + 3, ww);
+    std::copy(tc + 2 * k, tc + 2 * k + 2, tc);
+    std::copy(tb + 3 * k, tb + 3 * k + 3, tb);
+    std::copy(tw + 3 * k, tw + 3 * k + 3, tw);
+    std::copy(fs + 3 * k + 3, fs + 3 * k + 6, fs + 3);
+  }
+  if (b1 == n) {
+    std::fill(tw + 3 * (n - off), tw + 3 * (n - off) + 3, 0.0);  // nothing after the last
+    std::fill(fs + 3 * (n + 1 - off), fs + 3 * (n + 1 - off) + 3, 0.0);
+  }
+  segment_pass(b0, b1, off, x_.data()->data(), v_.data()->data(), q, w_.data()->data(),
+               inv_rest_.data(), gamma_t_inv_rest_.data(), kappa_rest_.data(), section_.stretch, fs,
+               ww, tc);
+  element_pass(r.elem0, r.elem1, off, q, n > 1 ? uhat_.data()->data() : nullptr, rest_elem_.data(),
+               inv_rest_elem_.data(), gamma_r_inv_rest_elem_.data(), kb, kt, ww, ta, tb, tw);
+  // The ends: ghost-frame clamps or nothing. The end frames are not integrated before this.
+  double unused[3];
+  if (b0 == 0) {
+    if (ghost_[0].active)
+      bend_element(ghost_[0].frame.coeffs().data(), q, 0.5 * rest_[0], 2.0 / rest_[0], kb, kt,
+                   ghost_[0].uhat.data(), unused, tb - 3 * off);
+    else
+      std::fill(tb - 3 * off, tb - 3 * off + 3, 0.0);
+  }
+  if (b1 == n) {
+    double* ta_end = ta + 3 * (n - 1 - off);
+    if (ghost_[1].active)
+      bend_element(q + 4 * (n - 1), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
+                   2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta_end, unused);
+    else
+      std::fill(ta_end, ta_end + 3, 0.0);
+  }
+  torque_pass(r.seg0, r.seg1, off, q, tc, ta, tb, tw, tau_.data()->data());
+  node_force_pass(r.node0, r.node1, off, fs, mass_.data(), gravity.x(), gravity.y(), gravity.z(),
                   f_.data()->data());
   for (const Load& l : loads_) {
     const bool force = l.kind == Load::Kind::kForce;
@@ -414,13 +440,13 @@ void Rod::integrate_block(int b0, int b1, double h) {
 }
 
 void Rod::compute_forces(double t, const Vec3& gravity) {
-  end_torques();
-  forces_block(0, num_segments(), t, gravity);
+  const int n = num_segments();
+  for (int b0 = 0; b0 < n; b0 += kStepBlock)
+    forces_block(b0, std::min(b0 + kStepBlock, n), t, gravity);
 }
 
 void Rod::step(double t, double h, const Vec3& gravity) {
   const int n = num_segments();
-  end_torques();
   for (int b0 = 0; b0 < n; b0 += kStepBlock) {
     const int b1 = std::min(b0 + kStepBlock, n);
     forces_block(b0, b1, t, gravity);
