@@ -61,7 +61,8 @@ class Rod {
   SegmentDrive* segment_drive(int segment);
   const std::vector<NodeDrive>& node_drives() const { return node_drives_; }
   const std::vector<SegmentDrive>& segment_drives() const { return segment_drives_; }
-  void add_load(const Load& l) { loads_.push_back(l); }
+  // Throws std::out_of_range for a node or segment the rod does not have.
+  void add_load(const Load& l);
   std::vector<Load>& loads() { return loads_; }
   const std::vector<Load>& loads() const { return loads_; }
   // Ghost-frame clamps at the start (before segment 0) and end (after the last segment).

@@ -104,6 +104,14 @@ void Rod::add_node_drive(const NodeDrive& d) {
   node_free_[d.node] = 0.0;
 }
 
+void Rod::add_load(const Load& l) {
+  const bool force = l.kind == Load::Kind::kForce;
+  if (l.index < 0 || l.index >= (force ? num_nodes() : num_segments()))
+    throw std::out_of_range("rod '" + name_ + "': no " + (force ? "node " : "segment ") +
+                            std::to_string(l.index) + " for a load");
+  loads_.push_back(l);
+}
+
 void Rod::add_segment_drive(const SegmentDrive& d) {
   if (d.segment < 0 || d.segment >= num_segments())
     throw std::out_of_range("rod '" + name_ + "': no segment " + std::to_string(d.segment));

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "corde_sim/energy_terms.h"
@@ -339,6 +340,20 @@ TEST_F(StepRegression, LongRodAcrossBlockEdgesFollowsTheReference) {
   EXPECT_LE(ex, 1e-9 * 0.5 / n);
   EXPECT_LE(eq, 1e-9);
   EXPECT_NEAR(rod.positions()[2048].x(), x2048.x() + 0.1 * t, 1e-12);  // the drive acted
+}
+
+// Indices are checked when a drive or load is added, so the step itself never checks them.
+TEST_F(StepRegression, OutOfRangeDrivesAndLoadsAreRefused) {
+  Rod rod = wavy_rod(5, 0.0);
+  EXPECT_THROW(rod.add_load({Load::Kind::kForce, 6, Vec3::UnitX(), 0.0, 0.0}), std::out_of_range);
+  EXPECT_THROW(rod.add_load({Load::Kind::kForce, -1, Vec3::UnitX(), 0.0, 0.0}), std::out_of_range);
+  EXPECT_THROW(rod.add_load({Load::Kind::kTorque, 5, Vec3::UnitX(), 0.0, 0.0}), std::out_of_range);
+  EXPECT_NO_THROW(rod.add_load({Load::Kind::kForce, 5, Vec3::UnitX(), 0.0, 0.0}));
+  EXPECT_NO_THROW(rod.add_load({Load::Kind::kTorque, 4, Vec3::UnitX(), 0.0, 0.0}));
+  EXPECT_EQ(rod.loads().size(), 2u);
+  EXPECT_THROW(rod.add_node_drive({NodeDrive::Kind::kFixed, 6, Vec3::Zero()}), std::out_of_range);
+  EXPECT_THROW(rod.add_segment_drive({SegmentDrive::Kind::kFixed, 5, Quat::Identity()}),
+               std::out_of_range);
 }
 
 }  // namespace
