@@ -179,7 +179,7 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
     for (auto it = grasps.begin(); it != grasps.end(); ++it) {
       const std::string key = "grasps/" + it->first;
       GraspSourceParam g;
-      std::string source = "topic";
+      std::string source;
       read<std::string>(pnh, key + "/source", source, "topic");
       try {
         g.source = parse_grasp_source(source);
