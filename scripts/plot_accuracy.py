@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""Accuracy against cost chart (validation.md V8) from corde_accuracy's CSV.
+"""Accuracy against cost chart (V8 of docs/validation_references.md) from corde_accuracy's CSV.
 
 Left: RMS tip error over five periods of mode 1 (relative to the static deflection) against CPU
 per simulated second, one line per clamp at h = 0.9 of the critical step, against both the
-Euler-Bernoulli series (validation.md) and the Timoshenko series (the model's continuum limit);
-smaller steps as faded markers. Right: CPU per 2 ms frame against N, with the peers of peers.md
-measured on the same rod (L = 1 m, r = 1 cm, rho = 1000, E = 1e7, G = E/3) for comparison.
+Euler-Bernoulli series (docs/validation_references.md) and the Timoshenko series (the model's
+continuum limit); smaller steps as faded markers. Right: CPU per 2 ms frame against N, with the
+peers of peers.md measured on the same rod (L = 1 m, r = 1 cm, rho = 1000, E = 1e7, G = E/3) for
+comparison.
 
 Usage: scripts/plot_accuracy.py [CSV] [PNG]
   (defaults docs/accuracy_vs_cost.csv and docs/accuracy_vs_cost.png; needs python3-matplotlib)

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Timoshenko beam frequencies of validation.md's example rod, the continuum limit of the CoRdE
-rod (shear stiffness kappa = G A, rotary inertia rho I), against Euler-Bernoulli.
+"""Timoshenko beam frequencies of the example rod of docs/validation_references.md, the continuum
+limit of the CoRdE rod (shear stiffness kappa = G A, rotary inertia rho I), against
+Euler-Bernoulli.
 
 Independent of the C++ code (scipy shooting + brentq); its ratios are the reference constants in
 test/unit/frequency_test.cpp and test/unit/accuracy_test.cpp. Run: scripts/timoshenko_frequencies.py

@@ -48,7 +48,7 @@ struct Load {
 // A fixed frame beyond an end of the rod, joined to the end segment by a bending element of half
 // a segment's rest length. With the end node fixed and the end segment free to rotate this is a
 // clamp whose bending acts at the node, which removes most of the O(1/N) bias of freezing the
-// whole end segment (model-notes.md).
+// whole end segment (docs/model.md, "Clamps").
 struct GhostFrame {
   bool active = false;
   Quat frame = Quat::Identity();

@@ -1,8 +1,9 @@
 // Per-element energies of the discrete CoRdE rod with their exact gradients.
 //
-// Quaternions follow model-notes.md: coeffs() = (q1, q2, q3, q4) with q4 the scalar part, and
-// the directors are the columns of toRotationMatrix(). Gradients with respect to a quaternion
-// are 4-vectors in coeffs() order; body_torque() turns them into body-frame torques.
+// Quaternions follow docs/model.md ("Quaternions and directors"): coeffs() = (q1, q2, q3, q4) with
+// q4 the scalar part, and the directors are the columns of toRotationMatrix(). Gradients with
+// respect to a quaternion are 4-vectors in coeffs() order; body_torque() turns them into body-frame
+// torques.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,16 +1,17 @@
 // Estimate of the largest stable time step of the explicit (semi-implicit Euler) integrator.
 //
 // The estimate linearises the rod about a straight, unstressed state, which splits it into three
-// families of modes (model-notes.md, "Time-step limits of explicit integration"), and finds the
+// families of modes (docs/model.md, "Time-step limits of explicit integration"), and finds the
 // highest eigenvalue of each exactly for the discrete rod as it is: its node masses, segment
 // inertias, rest lengths, ghost-frame clamps, and with kinematic (driven) nodes and segments
 // removed. A Sturm count on the banded mass-scaled stiffness, bisected, gives it in O(N).
 //  - stretch: axial node motion, springs K_s/l (continuum estimate 2c/l);
 //  - twist: segment rotation about d3, springs C/l (2 c_s/l);
 //  - bending-shear: per plane the nodes' transverse motion and the segments' tilt, coupled by
-//    the penalty kappa, with the frames' bending springs B/l. This one family holds the modes the
-//    notes list separately (bending through the frames, bending of the centreline, the penalty
-//    modes); their 2x2 continuum estimate misses modes at free ends that are up to ~8% higher.
+//    the penalty kappa, with the frames' bending springs B/l. This one family holds the modes
+//    docs/model.md lists separately (bending through the frames, bending of the centreline, the
+//    penalty modes); their 2x2 continuum estimate misses modes at free ends that are up to ~8%
+//    higher.
 // The internal friction of the top mode (gamma_t on stretch, gamma_r on twist and tilt) is taken
 // as modal damping c, and a damped mode of semi-implicit Euler (friction from the old velocity)
 // is stable while h^2 omega^2 + 2 h c < 4, so h = (sqrt(c^2 + 4 omega^2) - c) / omega^2, which is

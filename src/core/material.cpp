@@ -25,7 +25,7 @@ double pick(const char* direct_name, double direct, const char* modulus_name, do
 
 constexpr double kPi = 3.14159265358979323846;
 
-// kappa is the Timoshenko shear stiffness G A of a circular section (model-notes.md); the paper's
+// kappa is the Timoshenko shear stiffness G A of a circular section (docs/model.md); the paper's
 // printed kappa values were tuned under its r^2 inertia and would be far too stiff here.
 Material from_moduli(double E, double G, double Es, double rho, double radius, double tau_t,
                      double tau_r) {

@@ -1,5 +1,6 @@
-// V8 (validation.md): the suddenly loaded undamped cantilever and its exact modal series, the
-// core of corde_accuracy (accuracy against cost) and of its unit test. Library only, no ROS.
+// V8 (docs/validation_references.md): the suddenly loaded undamped cantilever and its exact modal
+// series, the core of corde_accuracy (accuracy against cost) and of its unit test. Library only,
+// no ROS.
 //
 // Tip history w(t)/delta = 1 - sum_n c_n cos(omega_n t), delta = P L^3/(3B), c_n = 12/(beta_n L)^4,
 // with beta_n L the roots of cos(b) cosh(b) = -1 (Euler-Bernoulli). The rod's continuum limit is
@@ -149,8 +150,9 @@ class ModalSeries {
   double static_part_ = 1.0;
 };
 
-// validation.md's example rod (L = 1, r = 1 cm, rho = 1000, E = E_s = 1e7, G = E/3, kappa = G A)
-// as a cantilever along x, clamped at node 0, loaded at the tip along -z from t = 0.
+// The example rod of docs/validation_references.md (L = 1, r = 1 cm, rho = 1000, E = E_s = 1e7,
+// G = E/3, kappa = G A) as a cantilever along x, clamped at node 0, loaded at the tip along -z
+// from t = 0.
 inline Rod make_cantilever(const StepCase& c) {
   Material m;
   m.youngs_modulus = m.stretch_modulus = 1e7;

@@ -1,6 +1,7 @@
-// corde_accuracy: accuracy against cost of the explicit rod (validation.md V8). Sweeps the number
-// of elements N and the time step (fractions of critical_time_step()) on the suddenly loaded
-// cantilever with both clamps, and writes one CSV row per run (plot: scripts/plot_accuracy.py).
+// corde_accuracy: accuracy against cost of the explicit rod (V8 of docs/validation_references.md).
+// Sweeps the number of elements N and the time step (fractions of critical_time_step()) on the
+// suddenly loaded cantilever with both clamps, and writes one CSV row per run (plot:
+// scripts/plot_accuracy.py).
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>

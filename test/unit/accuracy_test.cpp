@@ -16,7 +16,8 @@ TEST(AccuracyV8, ModalSeriesStartsAtRestAndMatchesIndependentTimoshenkoRoots) {
   const v8::ModalSeries eb(s.bend, s.mass_per_length, 1.0);
   const v8::ModalSeries timo(
       v8::Timoshenko{s.bend, s.kappa, s.mass_per_length, s.inertia_bend, 1.0}, 6);
-  // validation.md's coefficients and omega_1 of the example rod; w(0) = 0 up to the truncation.
+  // The coefficients and omega_1 of the example rod from docs/validation_references.md (V8);
+  // w(0) = 0 up to the truncation.
   EXPECT_NEAR(eb.coeff(0), 0.970688, 1e-6);
   EXPECT_NEAR(eb.coeff(3), 0.000821, 1e-6);
   EXPECT_NEAR(eb.omega(0), 1.75801, 1e-5);

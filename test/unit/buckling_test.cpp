@@ -1,5 +1,5 @@
-// V4 (validation.md): Euler buckling loads from the static Hessian, and the post-buckling
-// branch of a pinned-pinned elastica under imposed end shortening, solved as statics.
+// V4 (docs/validation_references.md): Euler buckling loads from the static Hessian, and the
+// post-buckling branch of a pinned-pinned elastica under imposed end shortening, solved as statics.
 // Pinned = node fixed, segment free (no ghost frame). Planar problems (normal y): this removes
 // the rigid rotation of a pinned-pinned rod about its chord, a zero mode. The references are
 // inextensible and unshearable: E_s and kappa are 1e3 times the example rod's (their effect on

@@ -1,6 +1,6 @@
-// V1 and V2 (validation.md): cantilevers solved as statics, both clamps, against beam theory
-// and the elastica. Natural clamp: node 0 and segment 0 fixed. Ghost clamp: node 0 fixed and a
-// ghost frame before segment 0.
+// V1 and V2 (docs/validation_references.md): cantilevers solved as statics, both clamps, against
+// beam theory and the elastica. Natural clamp: node 0 and segment 0 fixed. Ghost clamp: node 0
+// fixed and a ghost frame before segment 0.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -119,11 +119,11 @@ TEST(Cantilever, V1SelfWeight) {
   }
 }
 
-// V2, alpha = 1, 3, 10: Bisshopp & Drucker's elastica (validation.md). The reference is
-// inextensible and unshearable: E_s and kappa are 1e3 times the example rod's, so stretch and
-// shear move the tip by < 1e-6 L. Aim: within 0.01 L (tip angle 0.01 rad) at N = 50. Ghost
-// clamp: directly, and errors falling with N (25, 50, 100). Natural clamp: its raw error at N = 50
-// is about (3/(2N)) of the deflection, so Richardson extrapolation from N = 50 and 100 is
+// V2, alpha = 1, 3, 10: Bisshopp & Drucker's elastica (docs/validation_references.md). The
+// reference is inextensible and unshearable: E_s and kappa are 1e3 times the example rod's, so
+// stretch and shear move the tip by < 1e-6 L. Aim: within 0.01 L (tip angle 0.01 rad) at N = 50.
+// Ghost clamp: directly, and errors falling with N (25, 50, 100). Natural clamp: its raw error at
+// N = 50 is about (3/(2N)) of the deflection, so Richardson extrapolation from N = 50 and 100 is
 // checked against the aim, and the raw errors must fall at first order.
 TEST(Cantilever, V2LargeDeflection) {
   const Material m = val::example_material(1e3);

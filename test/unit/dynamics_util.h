@@ -1,5 +1,5 @@
-// Helpers shared by the dynamic validation tests (frequencies, pendulum, stability edge,
-// coiling): the example rod of validation.md, a sampled time loop, and spectral peak finding
+// Helpers shared by the dynamic validation tests (frequencies, pendulum, stability edge, coiling):
+// the example rod of docs/validation_references.md, a sampled time loop, and spectral peak finding
 // (radix-2 FFT, Hann window, zero padding, parabolic refinement of the peak).
 #pragma once
 
@@ -19,9 +19,9 @@ namespace dyn {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// validation.md's example rod: r = 1 cm, rho = 1000, E = E_s = 1e7, G = E/3, and the coupling
-// penalty kappa = kappa_scale * G A (kappa_scale 1: the Timoshenko shear stiffness of the section
-// with shear coefficient 1, as the library's presets use).
+// The example rod of docs/validation_references.md: r = 1 cm, rho = 1000, E = E_s = 1e7, G = E/3,
+// and the coupling penalty kappa = kappa_scale * G A (kappa_scale 1: the Timoshenko shear stiffness
+// of the section with shear coefficient 1, as the library's presets use).
 inline Material example_material(double kappa_scale = 1.0) {
   Material m;
   m.youngs_modulus = 1e7;

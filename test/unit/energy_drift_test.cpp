@@ -10,7 +10,7 @@
 //     the fast modes and then stays flat: the translational update alone, and the whole rod with
 //     isotropic segment inertia, show no drift. What remains is a slow secular drift of order h.
 //     It comes from the explicit gyroscopic term w x I w of the rotational update
-//     (model-notes.md: w += h I^-1 (tau - w x I w)), which is not symplectic. With a rod segment's
+//     (docs/model.md: w += h I^-1 (tau - w x I w)), which is not symplectic. With a rod segment's
 //     axisymmetric inertia (I3 = 2 I1) that drift is a loss in the free-rod case below.
 //  2. A free rigid segment spinning about its axis shows the same term directly. Explicit Euler on
 //     Euler's equations multiplies the transverse angular velocity by sqrt(1 + (h Omega)^2) per
@@ -19,7 +19,7 @@
 //     The rod blows up after 10 to 20 s at every h tried (later for a smaller h), not because
 //     omega h > 2. A little internal friction (the preset's 10 us on bending and twist) or
 //     isotropic inertia (no gyroscopic term) removes it.
-// The behaviour follows model-notes.md and the reference implementation of
+// The behaviour follows docs/model.md ("Time integration") and the reference implementation of
 // step_regression_test.cpp, which uses the same explicit term. This file states what the step
 // does; it does not change it.
 #include <gtest/gtest.h>

@@ -1,6 +1,7 @@
-// V3 (validation.md): natural frequencies of the example rod against beam theory, measured by
-// FFT of a node's free vibration. Undamped, no gravity, amplitude <= 1e-3 L, >= 20 periods of the
-// lowest mode of each family, h = 0.5 of critical_time_step(). kappa = G A (shear coefficient 1).
+// V3 (docs/validation_references.md): natural frequencies of the example rod against beam theory,
+// measured by FFT of a node's free vibration. Undamped, no gravity, amplitude <= 1e-3 L, >= 20
+// periods of the lowest mode of each family, h = 0.5 of critical_time_step(). kappa = G A (shear
+// coefficient 1).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -118,8 +119,9 @@ TEST(PeakFrequency, RecoversSyntheticTonesToTenPpm) {
 }
 
 TEST(Frequencies, FreeFreeBendingModesOneAndTwo) {
-  // Against Euler-Bernoulli (validation.md, aim 1% at N = 50) and against the Timoshenko limit,
-  // where the discretisation error shows its order (measured 1.98 for both modes).
+  // Against Euler-Bernoulli (docs/validation_references.md, aim 1% at N = 50) and against the
+  // Timoshenko limit, where the discretisation error shows its order (measured 1.98 for both
+  // modes).
   const Bending coarse = free_free_bending(25), fine = free_free_bending(50);
   for (int k = 0; k < 2; ++k) {
     const double e25 = coarse.measured[k] / coarse.ref[k] - 1.0;

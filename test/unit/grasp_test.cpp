@@ -12,8 +12,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// validation.md's example rod (L = 1, r = 1 cm, E = 1e7, G = E/3) along x, with internal friction
-// so that quasi-static motions settle.
+// The example rod of docs/validation_references.md (L = 1, r = 1 cm, E = 1e7, G = E/3) along x,
+// with internal friction so that quasi-static motions settle.
 Rod example_rod(int elements, double tau) {
   Material m;
   m.youngs_modulus = 1e7;

@@ -1,7 +1,7 @@
-// V6 (validation.md): invariants. Rigid motions change no elastic energy and meet no internal
-// friction; a free rod falls with its centre of mass at exactly g; a free undamped rod keeps its
-// linear momentum to round-off, its angular momentum to a small measured drift, and its energy
-// oscillates by about omega h / 2 without drift.
+// V6 (docs/validation_references.md): invariants. Rigid motions change no elastic energy and meet
+// no internal friction; a free rod falls with its centre of mass at exactly g; a free undamped rod
+// keeps its linear momentum to round-off, its angular momentum to a small measured drift, and its
+// energy oscillates by about omega h / 2 without drift.
 #include <gtest/gtest.h>
 
 #include <cmath>

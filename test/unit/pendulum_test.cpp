@@ -1,8 +1,9 @@
-// V5 (validation.md): a very stiff rod pinned at one end (node 0 fixed, segment 0 free) swings
-// under gravity like a rigid compound pendulum. Reference: T = T0 (2/pi) K(sin(theta0/2)) with
-// T0 = 2 pi sqrt(2L/(3g)) times sqrt(I_discrete / I_continuum) = sqrt(1 + 1/(2N^2) + 3r^2/(4L^2)):
-// lumped node masses (the validation.md factor) and the segments' own rotational inertia
-// (physical, rho pi r^4/4 per length; 3e-4 here). Aim 0.3%; measured errors are about 1e-5.
+// V5 (docs/validation_references.md): a very stiff rod pinned at one end (node 0 fixed,
+// segment 0 free) swings under gravity like a rigid compound pendulum. Reference:
+// T = T0 (2/pi) K(sin(theta0/2)) with T0 = 2 pi sqrt(2L/(3g)) times
+// sqrt(I_discrete / I_continuum) = sqrt(1 + 1/(2N^2) + 3r^2/(4L^2)): lumped node masses (the
+// reference's factor) and the segments' own rotational inertia (physical, rho pi r^4/4 per
+// length; 3e-4 here). Aim 0.3%; measured errors are about 1e-5.
 //
 // Stiffness: L = 1, r = 2 cm, rho = 1000, E = E_s = 1e10, G = E/3, kappa = G A. Just stiff enough
 // to be rigid to ~1e-4: the largest stretch strain of the 90 degree swing is 2.4e-6 and the

@@ -31,7 +31,8 @@ struct Case {
   double stretch_scale = 1.0;  // E_s = scale * E (braided ropes: E_s >> E)
 };
 
-// validation.md's example rod: L = 1, r = 1 cm, rho = 1000, E = E_s = 1e7, G = E/3.
+// The example rod of docs/validation_references.md: L = 1, r = 1 cm, rho = 1000,
+// E = E_s = 1e7, G = E/3.
 Rod make_rod(const Case& c) {
   const double r = 0.01, area = kPi * r * r, e = 1e7;
   Material m;
@@ -101,11 +102,11 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{40, 0.1, 1e-3, false},    // stretch limited by its friction
                       Case{20, 1.0, 1e-2, false}));  // heavily damped stretch
 
-// V7 exactly as validation.md words it: a run is unstable if its total energy exceeds 10x the
-// initial energy within 10^4 steps (checked every 10 steps, stopping at the first excess). The
-// edge is bisected 7 times inside [0.5, 1.5] x the prediction (resolution 0.8% of it). Near the
-// edge a stable top mode's energy swings by (1 + h w/2)/(1 - h w/2), so this criterion reads the
-// edge a little early: measured/predicted slightly below 1 is expected, aim 0.7 .. 1.05.
+// V7 exactly as docs/validation_references.md states it: a run is unstable if its total energy
+// exceeds 10x the initial energy within 10^4 steps (checked every 10 steps, stopping at the first
+// excess). The edge is bisected 7 times inside [0.5, 1.5] x the prediction (resolution 0.8% of it).
+// Near the edge a stable top mode's energy swings by (1 + h w/2)/(1 - h w/2), so this criterion
+// reads the edge a little early: measured/predicted slightly below 1 is expected, aim 0.7 .. 1.05.
 bool exceeds_tenfold(const Case& c, double h) {
   Rod rod = make_rod(c);
   const Vec3 g = Vec3::Zero();
@@ -121,7 +122,7 @@ bool exceeds_tenfold(const Case& c, double h) {
   return false;
 }
 
-// The notes' continuum estimates (model-notes.md), independent of stability.cpp: 2/omega_max over
+// The continuum estimates of docs/model.md, independent of stability.cpp: 2/omega_max over
 // stretch 2c/l, twist 2c_s/l, frame bending 2c/l, centreline bending 4 sqrt(B/(rho A))/l^2 and
 // the coupling penalty 2 sqrt(kappa/(rho A)) sqrt(1/l^2 + 1/r^2).
 double continuum_estimate(const Rod& rod) {
@@ -173,7 +174,7 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{40, 1.0, 0.0, false, 10.0}));  // stretch dominates (E_s = 10 E)
 
 TEST(Stability, ContinuumLimitsForLongElements) {
-  // With l >> r and a soft penalty the families approach the notes' continuum formulas:
+  // With l >> r and a soft penalty the families approach the continuum formulas of docs/model.md:
   // stretch 2c/l, twist 2 c_s/l (interior of a free chain: slightly below).
   const Rod rod = make_rod({10, 1e-3, 0.0, false});
   const StabilityEstimate est = estimate_stability(rod);

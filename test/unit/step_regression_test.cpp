@@ -1,6 +1,6 @@
 // Golden comparison of Rod::compute_forces and Rod::step against a straightforward reference
 // written here from the element energies of energy_terms.h (forces from their gradients, body
-// torques through body_torque) and the integrator of model-notes.md, so that optimisations of the
+// torques through body_torque) and the integrator of docs/model.md, so that optimisations of the
 // rod kernel (fused loops, precomputed inverses, relative rotations) cannot change the physics.
 #include <gtest/gtest.h>
 
@@ -99,7 +99,8 @@ RefForces reference_forces(const Rod& rod, double t, const Vec3& gravity) {
   return r;
 }
 
-// Semi-implicit Euler of model-notes.md (eqs. 37-42), then the drives at the end of the step.
+// Semi-implicit Euler of docs/model.md (the paper's eqs. 37-42), then the drives at the end of
+// the step.
 void reference_step(Rod* rod, double t, double h, const Vec3& gravity) {
   const RefForces r = reference_forces(*rod, t, gravity);
   const int n = rod->num_segments();
@@ -167,7 +168,8 @@ class StepRegression : public ::testing::Test {
     return Quat(Vec4(uni(-1, 1), uni(-1, 1), uni(-1, 1), uni(-1, 1))).normalized();
   }
 
-  // validation.md's example material with internal friction and a distinct twist stiffness.
+  // The example material of docs/validation_references.md with internal friction and a distinct
+  // twist stiffness.
   Section section() {
     Material m;
     m.youngs_modulus = 1e7;

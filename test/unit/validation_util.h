@@ -1,5 +1,5 @@
-// Helpers shared by the static and invariant validation tests: validation.md's example rod,
-// cantilever clamps, and convergence arithmetic.
+// Helpers shared by the static and invariant validation tests: the example rod of
+// docs/validation_references.md, cantilever clamps, and convergence arithmetic.
 #pragma once
 
 #include <cmath>
@@ -14,10 +14,10 @@ namespace val {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kLength = 1.0, kRadius = 0.01;
 
-// validation.md's example rod: r = 1 cm, rho = 1000, E = E_s = 1e7 Pa, G = E/3, the coupling
-// penalty kappa = G A (a Timoshenko shear stiffness with shear coefficient 1). `stiff` multiplies
-// E_s and kappa: the elastica references are inextensible and unshearable, and with stiff = 1e3
-// stretch and shear change their tip positions by < 1e-6 L.
+// The example rod of docs/validation_references.md: r = 1 cm, rho = 1000, E = E_s = 1e7 Pa,
+// G = E/3, the coupling penalty kappa = G A (a Timoshenko shear stiffness with shear
+// coefficient 1). `stiff` multiplies E_s and kappa: the elastica references are inextensible and
+// unshearable, and with stiff = 1e3 stretch and shear change their tip positions by < 1e-6 L.
 inline Material example_material(double stiff = 1.0, double youngs = 1e7) {
   Material m;
   m.youngs_modulus = youngs;
@@ -40,7 +40,7 @@ inline Rod straight_rod(const Material& m, int elements, double length = kLength
 }
 
 // Natural clamp: node 0 and segment 0 fixed (bending acts at the end of segment 0, O(1/N) bias).
-// Ghost clamp: node 0 fixed, segment 0 free, a fixed ghost frame before it (model-notes.md).
+// Ghost clamp: node 0 fixed, segment 0 free, a fixed ghost frame before it (docs/model.md).
 enum class Clamp { kNatural, kGhost };
 
 inline const char* clamp_name(Clamp c) { return c == Clamp::kNatural ? "natural" : "ghost"; }
