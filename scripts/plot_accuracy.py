@@ -5,8 +5,8 @@ Left: RMS tip error over five periods of mode 1 (relative to the static deflecti
 per simulated second, one line per clamp at h = 0.9 of the critical step, against both the
 Euler-Bernoulli series (docs/validation_references.md) and the Timoshenko series (the model's
 continuum limit); smaller steps as faded markers. Right: CPU per 2 ms frame against N, with the
-peers of peers.md measured on the same rod (L = 1 m, r = 1 cm, rho = 1000, E = 1e7, G = E/3) for
-comparison.
+peers of docs/peers.md measured on the same rod (L = 1 m, r = 1 cm, rho = 1000, E = 1e7,
+G = E/3) for comparison.
 
 Usage: scripts/plot_accuracy.py [CSV] [PNG]
   (defaults docs/accuracy_vs_cost.csv and docs/accuracy_vs_cost.png; needs python3-matplotlib)
@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 
-# peers.md, "Accuracy against cost of the two peers above (measured)": N -> CPU per 2 ms frame
+# docs/peers.md, "Accuracy against cost: MuJoCo chain and XPBD": N -> CPU per 2 ms frame
 # (microseconds). Their errors come from a static sag test, not comparable with V8 (see
 # docs/validation_dynamic.md).
 PEERS = {
@@ -79,7 +79,7 @@ def main():
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="lower left", framealpha=0.9)
     for (name, (n, cpu)), style in zip(PEERS.items(), ("^-", "v-", "x:")):
-        bx.loglog(n, cpu, style, color="k", alpha=0.7, label=f"{name} (peers.md)")
+        bx.loglog(n, cpu, style, color="k", alpha=0.7, label=f"{name} (docs/peers.md)")
     bx.set_xticks([10, 20, 40, 80])
     bx.get_xaxis().set_major_formatter(matplotlib.ticker.ScalarFormatter())
     bx.get_xaxis().set_minor_formatter(matplotlib.ticker.NullFormatter())

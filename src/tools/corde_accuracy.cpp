@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
         c.periods = periods;
         const corde::v8::StepResult r = corde::v8::run_step_case(c);
         const double per_sim = r.cpu_seconds / r.simulated_seconds;
-        // cpu_per_frame_us: CPU per 2 ms of simulated time, the unit of peers.md's tables.
+        // cpu_per_frame_us: CPU per 2 ms of simulated time, the unit of docs/peers.md's tables.
         std::fprintf(
             out, "semi_implicit_euler,%s,%d,%g,%.6e,%ld,%.6f,%.6f,%.6e,%.4f,%.6e,%.6e,%.6e,%.6e\n",
             ghost ? "ghost" : "natural", c.elements, f, r.h, r.steps, r.simulated_seconds,
