@@ -146,6 +146,7 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   read(pnh, "tf_every_k", p.tf_every_k, 1);
   if (p.tf_every_k < 1)
     bad("tf_every_k", "must be an integer >= 1, got " + std::to_string(p.tf_every_k));
+  read(pnh, "node_frames", p.node_frames, false);
 
   std::string style;
   read<std::string>(pnh, "marker_style", style, "cylinders");
@@ -200,9 +201,10 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
            p.real_time_factor == 0.0 ? " (as fast as possible)" : "",
            p.publish_clock ? "true" : "false");
   ROS_INFO(
-      "corde_sim: ~tf_rate = %g Hz, ~tf_every_k = %d, ~marker_rate = %g Hz, ~state_rate = %g Hz, "
-      "~loop_rate = %g Hz",
-      p.tf_rate, p.tf_every_k, p.marker_rate, p.state_rate, p.loop_rate);
+      "corde_sim: ~tf_rate = %g Hz, ~tf_every_k = %d, ~node_frames = %s, ~marker_rate = %g Hz, "
+      "~state_rate = %g Hz, ~loop_rate = %g Hz",
+      p.tf_rate, p.tf_every_k, p.node_frames ? "true" : "false", p.marker_rate, p.state_rate,
+      p.loop_rate);
   ROS_INFO(
       "corde_sim: ~marker_style = %s, ~show_frames = %s, ~color_by_strain = %s, "
       "~marker_min_diameter = %g m",

@@ -1,7 +1,13 @@
 #include "corde_sim/ros/outputs.h"
 
+#include <ros/console.h>
+#include <ros/names.h>
+
 #include <algorithm>
+#include <boost/make_shared.hpp>
 #include <cmath>
+#include <cstdio>
+#include <iterator>
 
 namespace corde_sim {
 namespace {
@@ -80,6 +86,7 @@ visualization_msgs::Marker base_marker(const std::string& ns, int id, int type,
 void TfFrames::layout(const corde::World& world, const std::vector<GraspView>& grasps,
                       const std::string& prefix, const std::string& world_frame, int every_k) {
   every_k_ = std::max(1, every_k);
+  laid_out_node_frames_ = node_frames_;
   tfs_.clear();
   geometry_msgs::TransformStamped t;
   t.header.frame_id = world_frame;
@@ -89,6 +96,12 @@ void TfFrames::layout(const corde::World& world, const std::vector<GraspView>& g
     tfs_.push_back(t);
     for (int s = 0; s < rod.num_segments(); s += every_k_) {
       t.child_frame_id = prefix + rod.name() + "/seg_" + std::to_string(s);
+      tfs_.push_back(t);
+    }
+    t.child_frame_id = prefix + rod.name() + "/tip";
+    tfs_.push_back(t);
+    for (int i = 0; laid_out_node_frames_ && i < rod.num_nodes(); ++i) {
+      t.child_frame_id = prefix + rod.name() + "/node_" + std::to_string(i);
       tfs_.push_back(t);
     }
   }
@@ -109,6 +122,13 @@ const std::vector<geometry_msgs::TransformStamped>& TfFrames::update(
     for (int s = 0; s < rod.num_segments(); s += every_k_) {
       tfs_[i].header.stamp = stamp;
       set_transform(0.5 * (x[s] + x[s + 1]), q[s], &tfs_[i++].transform);
+    }
+    const int last = rod.num_segments() - 1;
+    tfs_[i].header.stamp = stamp;
+    set_transform(x[last + 1], q[last], &tfs_[i++].transform);
+    for (int n = 0; laid_out_node_frames_ && n <= last + 1; ++n) {
+      tfs_[i].header.stamp = stamp;
+      set_transform(x[n], q[std::min(n, last)], &tfs_[i++].transform);
     }
   }
   for (const GraspView& g : grasps) {
@@ -148,7 +168,9 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
     out->markers.push_back(clear);
   }
   std::vector<double> strain;
+  std::vector<int> clamped;
   double max_diameter = 0.0;
+  int node_base = 0;  // index of the rod's node 0 counted over all rods: the clamps' ids
   for (size_t r = 0; r < world.rods().size(); ++r) {
     const corde::Rod& rod = world.rods()[r];
     const int n = rod.num_segments();
@@ -156,11 +178,12 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
     const auto& q = rod.orientations();
     const double diameter = std::max(2.0 * rod.section().radius, o.min_diameter);
     max_diameter = std::max(max_diameter, diameter);
+    double top = 0.0;
     if (o.color_by_strain) {
       segment_strains(rod, &strain);
       // Scaled by the rod's own largest strain so that any material shows its pattern; the floor
       // keeps a nearly straight rod blue instead of amplifying round-off.
-      const double top = std::max(1e-4, *std::max_element(strain.begin(), strain.end()));
+      top = std::max(1e-4, *std::max_element(strain.begin(), strain.end()));
       for (double& e : strain) e /= top;
     }
     const std_msgs::ColorRGBA solid = rod_color(r);
@@ -206,6 +229,38 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
       }
       out->markers.push_back(std::move(m));
     }
+    // Clamps: every fixed node and every ghost-clamped end (a ghost clamp also fixes its node,
+    // so each node is drawn once), oriented with the ghost frame or the adjacent segment (frozen
+    // too for a natural clamp). A flat box shows the clamp's d1/d2 axes, unlike a disc.
+    clamped.clear();
+    for (const corde::NodeDrive& d : rod.node_drives())
+      if (d.kind == corde::NodeDrive::Kind::kFixed) clamped.push_back(d.node);
+    if (rod.ghost_start().active) clamped.push_back(0);
+    if (rod.ghost_end().active) clamped.push_back(n);
+    std::sort(clamped.begin(), clamped.end());
+    clamped.erase(std::unique(clamped.begin(), clamped.end()), clamped.end());
+    for (int i : clamped) {
+      Marker m = base_marker("clamps", node_base + i, Marker::CUBE, o, stamp);
+      corde::Quat frame = q[std::min(i, n - 1)];
+      if (i == 0 && rod.ghost_start().active) frame = rod.ghost_start().frame;
+      if (i == n && rod.ghost_end().active) frame = rod.ghost_end().frame;
+      set_pose(x[i], frame, &m.pose);
+      m.scale.x = m.scale.y = 2.5 * diameter;
+      m.scale.z = 0.8 * diameter;
+      m.color = rgba(0.55, 0.55, 0.58);
+      out->markers.push_back(std::move(m));
+    }
+    if (o.color_by_strain) {
+      // Above the start, clear of a clamp there.
+      Marker m = base_marker("legend", static_cast<int>(r), Marker::TEXT_VIEW_FACING, o, stamp);
+      const double height = std::max(0.02, 2.0 * diameter);
+      m.pose.position = point(x[0] + Eigen::Vector3d(0, 0, 2.0 * diameter + 1.5 * height));
+      m.scale.z = height;
+      m.color = rgba(1, 1, 1);
+      m.text = strain_legend(rod.name(), top);
+      out->markers.push_back(std::move(m));
+    }
+    node_base += rod.num_nodes();
   }
   const double grasp_size = std::max(0.02, 3.0 * max_diameter);
   for (const GraspView& g : grasps) {
@@ -220,6 +275,76 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
     label.color = rgba(1, 1, 1);
     label.text = g.name;
     out->markers.push_back(std::move(label));
+  }
+}
+
+std::string strain_legend(const std::string& rod, double top) {
+  char scale[64];
+  std::snprintf(scale, sizeof(scale), "%.2g", top);
+  return rod + ": blue 0 .. red " + scale + " surface strain";
+}
+
+void fill_path(const corde::Rod& rod, const std_msgs::Header& header, nav_msgs::Path* out) {
+  const auto& x = rod.positions();
+  const auto& q = rod.orientations();
+  const int last = rod.num_segments() - 1;
+  out->header = header;
+  out->poses.resize(x.size());
+  for (int i = 0; i <= last + 1; ++i) {
+    out->poses[i].header = header;
+    set_pose(x[i], q[std::min(i, last)], &out->poses[i].pose);
+  }
+}
+
+void fill_segment_poses(const corde::Rod& rod, const std_msgs::Header& header,
+                        geometry_msgs::PoseArray* out) {
+  const auto& x = rod.positions();
+  const auto& q = rod.orientations();
+  out->header = header;
+  out->poses.resize(q.size());
+  for (size_t s = 0; s < q.size(); ++s) set_pose(0.5 * (x[s] + x[s + 1]), q[s], &out->poses[s]);
+}
+
+void RodPaths::publish(ros::NodeHandle& nh, const corde::World& world,
+                       const std::string& world_frame, const ros::Time& stamp) {
+  // Follow the world's rods (a reset may load another scene): drop topics of rods that went.
+  for (auto it = topics_.begin(); it != topics_.end();) {
+    const auto& rods = world.rods();
+    const bool present = std::any_of(
+        rods.begin(), rods.end(), [&](const corde::Rod& rod) { return rod.name() == it->first; });
+    it = present ? std::next(it) : topics_.erase(it);
+  }
+  std_msgs::Header header;
+  header.stamp = stamp;
+  header.frame_id = world_frame;
+  for (const corde::Rod& rod : world.rods()) {
+    auto found = topics_.find(rod.name());
+    if (found == topics_.end()) {
+      Topics t;
+      // Rod names are free text in scene files; advertise would throw on one that is no name.
+      std::string error;
+      t.valid = ros::names::validate("rods/" + rod.name(), error);
+      if (t.valid) {
+        t.path = nh.advertise<nav_msgs::Path>("rods/" + rod.name() + "/path", 1);
+        t.poses = nh.advertise<geometry_msgs::PoseArray>("rods/" + rod.name() + "/poses", 1);
+      } else {
+        ROS_WARN("corde_sim: rod '%s' gets no path and poses topics: %s", rod.name().c_str(),
+                 error.c_str());
+      }
+      found = topics_.emplace(rod.name(), std::move(t)).first;
+    }
+    Topics& t = found->second;
+    if (!t.valid) continue;
+    if (t.path.getNumSubscribers() > 0) {
+      auto msg = boost::make_shared<nav_msgs::Path>();
+      fill_path(rod, header, msg.get());
+      t.path.publish(msg);
+    }
+    if (t.poses.getNumSubscribers() > 0) {
+      auto msg = boost::make_shared<geometry_msgs::PoseArray>();
+      fill_segment_poses(rod, header, msg.get());
+      t.poses.publish(msg);
+    }
   }
 }
 

@@ -93,6 +93,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>(
       "/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { send_tf_to(pub); });
   marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
+  tf_frames_.set_node_frames(params_.node_frames);  // before the first layout
   state_pub_ = nh_.advertise<WorldState>("rod_state", 10);
   if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
 
@@ -239,6 +240,7 @@ void SimNode::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
 }
 
 void SimNode::publish_markers() {
+  publish_paths();  // same rate, each topic built only for its subscribers
   if (marker_pub_.getNumSubscribers() == 0) return;
   MarkerOptions o;
   o.style = params_.marker_style;
@@ -252,6 +254,8 @@ void SimNode::publish_markers() {
   markers_clear_ = false;
   marker_pub_.publish(msg);
 }
+
+void SimNode::publish_paths() { rod_paths_.publish(nh_, world_, params_.world_frame, stamp()); }
 
 void SimNode::update_stats(double now) {
   if (steps_since_stats_ > 0) step_time_us_ = 1e6 * step_wall_since_stats_ / steps_since_stats_;

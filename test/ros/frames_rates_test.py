@@ -53,7 +53,7 @@ class FramesRates(unittest.TestCase):
         self.check_rate(len(self.states), RATES["state"], "rod_state")
 
     def test_tf_has_every_frame_once_per_message_with_one_stamp(self):
-        expected = {"rope", "grasp/gripper"} | {"rope/seg_%d" % k for k in range(N)}
+        expected = {"rope", "rope/tip", "grasp/gripper"} | {"rope/seg_%d" % k for k in range(N)}
         for m in self.all_tfs:
             children = [t.child_frame_id for t in m.transforms]
             self.assertEqual(sorted(children), sorted(expected))

@@ -29,6 +29,7 @@ struct NodeParams {
   bool publish_clock = false;
   double tf_rate = 50.0;  // Hz of wall time, 0 = off
   int tf_every_k = 1;
+  bool node_frames = false;   // also a frame at every node (<rod>/node_<i>)
   double marker_rate = 20.0;  // Hz of wall time, 0 = off
   double state_rate = 50.0;   // Hz of wall time, 0 = off
   MarkerStyle marker_style = MarkerStyle::kCylinders;

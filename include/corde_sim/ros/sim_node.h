@@ -110,6 +110,7 @@ class SimNode {
   void publish_tf();
   void send_tf_to(const ros::SingleSubscriberPublisher& pub);
   void publish_markers();
+  void publish_paths();  // rods/<rod>/path and rods/<rod>/poses, at the marker rate
   void publish_state();
   void publish_clock();
   void update_stats(double now);
@@ -159,6 +160,7 @@ class SimNode {
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   TfFrames tf_frames_;
+  RodPaths rod_paths_;
 };
 
 // Steady (monotonic) wall clock in seconds.
