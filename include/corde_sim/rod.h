@@ -59,12 +59,25 @@ class Rod {
   bool remove_segment_drive(int segment);
   NodeDrive* node_drive(int node);
   SegmentDrive* segment_drive(int segment);
+  const NodeDrive* node_drive(int node) const { return const_cast<Rod*>(this)->node_drive(node); }
+  const SegmentDrive* segment_drive(int segment) const {
+    return const_cast<Rod*>(this)->segment_drive(segment);
+  }
   const std::vector<NodeDrive>& node_drives() const { return node_drives_; }
   const std::vector<SegmentDrive>& segment_drives() const { return segment_drives_; }
   // Throws std::out_of_range for a node or segment the rod does not have.
   void add_load(const Load& l);
   std::vector<Load>& loads() { return loads_; }
   const std::vector<Load>& loads() const { return loads_; }
+  // External forces on nodes and torques on segments (world frame) that inputs set and change
+  // while the rod runs (a wrench on a grasp, contacts): added to the forces each step. They cost
+  // nothing until the first one is set.
+  void add_external_force(int node, const Vec3& f);
+  void add_external_torque(int segment, const Vec3& torque);
+  void clear_external();  // all back to zero (and no cost in the step)
+  bool has_external() const { return has_external_; }
+  const std::vector<Vec3>& external_forces() const { return ext_f_; }
+  const std::vector<Vec3>& external_torques() const { return ext_tau_; }
   // Ghost-frame clamps at the start (before segment 0) and end (after the last segment).
   GhostFrame& ghost_start() { return ghost_[0]; }
   GhostFrame& ghost_end() { return ghost_[1]; }
@@ -85,6 +98,11 @@ class Rod {
   Vec3 angular_momentum() const;  // about the origin, including the segments' spin
   bool finite() const;
   double length() const;  // current centreline length
+  // Axial strain |x_{s+1} - x_s| / l_s - 1 of segment s, and the axial force K_s times it (N).
+  double stretch_strain(int s) const { return (x_[s + 1] - x_[s]).norm() / rest_[s] - 1.0; }
+  double tension(int s) const { return section_.stretch * stretch_strain(s); }
+  // Largest stretch_strain over the segments, and the segment where it is.
+  double max_stretch_strain(int* segment = nullptr) const;
 
  private:
   void update_mass_and_inertia();
@@ -121,6 +139,8 @@ class Rod {
   std::vector<NodeDrive> node_drives_;
   std::vector<SegmentDrive> segment_drives_;
   std::vector<Load> loads_;
+  std::vector<Vec3> ext_f_, ext_tau_;  // empty until the first external force or torque
+  bool has_external_ = false;
   GhostFrame ghost_[2];
 };
 

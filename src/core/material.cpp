@@ -9,7 +9,8 @@ namespace {
 void check_value(const char* name, double v, bool allow_zero) {
   if (!std::isfinite(v)) throw std::invalid_argument(std::string(name) + " is not finite");
   if (v < 0.0 || (!allow_zero && v == 0.0))
-    throw std::invalid_argument(std::string(name) + (allow_zero ? " must be >= 0" : " must be > 0"));
+    throw std::invalid_argument(std::string(name) +
+                                (allow_zero ? " must be >= 0" : " must be > 0"));
 }
 
 // Picks a direct stiffness if given, else modulus times section moment; one of them must be > 0.
@@ -53,22 +54,24 @@ Section make_section(const Material& m, double radius) {
   check_value("kappa", m.kappa, true);
   check_value("gamma_t", m.gamma_t, true);
   check_value("gamma_r", m.gamma_r, true);
+  check_value("max_strain", m.max_strain, true);
   const double r2 = radius * radius;
   const double area = kPi * r2;
   Section s;
   s.radius = radius;
-  s.bend = pick("bend_stiffness", m.bend_stiffness, "youngs_modulus", m.youngs_modulus,
-                area * r2 / 4.0);
-  s.twist = pick("twist_stiffness", m.twist_stiffness, "shear_modulus", m.shear_modulus,
-                 area * r2 / 2.0);
-  s.stretch = pick("stretch_stiffness", m.stretch_stiffness, "stretch_modulus",
-                   m.stretch_modulus, area);
+  s.bend =
+      pick("bend_stiffness", m.bend_stiffness, "youngs_modulus", m.youngs_modulus, area * r2 / 4.0);
+  s.twist =
+      pick("twist_stiffness", m.twist_stiffness, "shear_modulus", m.shear_modulus, area * r2 / 2.0);
+  s.stretch =
+      pick("stretch_stiffness", m.stretch_stiffness, "stretch_modulus", m.stretch_modulus, area);
   s.kappa = m.kappa;
   s.gamma_t = m.gamma_t;
   s.gamma_r = m.gamma_r;
   s.mass_per_length = m.density * area;
   s.inertia_bend = m.density * area * r2 / 4.0;
   s.inertia_twist = m.density * area * r2 / 2.0;
+  s.max_strain = m.max_strain;
   return s;
 }
 
@@ -82,7 +85,8 @@ const std::vector<MaterialPreset>& material_presets() {
                  from_moduli(0.5e6, 0.5e6, 20e6, 1300, 0.01, 4e-5, 1e-5), 0.01});
     p.push_back({"paper_wire",
                  "CoRdE Table 2 wire: E = 200 MPa, G = 100 MPa, E_s = 100 MPa, rho = 7860, "
-                 "r = 1 mm (printed MPa: 1000x softer than steel); kappa = G A; retardation 1 us (elements of 2 mm)",
+                 "r = 1 mm (printed MPa: 1000x softer than steel); kappa = G A; retardation 1 us "
+                 "(elements of 2 mm)",
                  from_moduli(200e6, 100e6, 100e6, 7860, 0.001, 1e-6, 1e-6), 0.001});
     p.push_back({"paper_thread",
                  "CoRdE Table 2 thread: E = G = 10 Pa, E_s = 20 kPa, rho = 1300, r = 1 mm; "
@@ -102,8 +106,14 @@ const std::vector<MaterialPreset>& material_presets() {
     p.push_back({"soft_cable",
                  "PVC-insulated electrical cable, r = 3 mm: bending modulus 30 MPa (B ~ 2e-3 "
                  "N m^2, a limp power cord), shear 10 MPa, axial 5 GPa carried by the copper "
-                 "strands (~5% of the section at 120 GPa), rho = 2000; retardation 0.5 us stretch, 10 us bend/twist (elements of 2 cm)",
+                 "strands (~5% of the section at 120 GPa), rho = 2000; retardation 0.5 us stretch, "
+                 "10 us bend/twist (elements of 2 cm)",
                  from_moduli(30e6, 10e6, 5e9, 2000, 0.003, 5e-7, 1e-5), 0.003});
+    // Axial strain limits: where each material stops behaving elastically (yield of steel and
+    // copper, the working elongation of a nylon braid) or, for the paper's soft materials, a
+    // strain their tests never approach.
+    const double max_strain[] = {0.1, 0.01, 1.0, 0.005, 0.15, 0.02};
+    for (size_t i = 0; i < p.size(); ++i) p[i].material.max_strain = max_strain[i];
     return p;
   }();
   return presets;

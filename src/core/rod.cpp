@@ -138,6 +138,30 @@ bool Rod::remove_segment_drive(int segment) {
   return true;
 }
 
+void Rod::add_external_force(int node, const Vec3& f) {
+  if (node < 0 || node >= num_nodes())
+    throw std::out_of_range("rod '" + name_ + "' has no node " + std::to_string(node));
+  if (!has_external_) {
+    ext_f_.assign(num_nodes(), Vec3::Zero());
+    ext_tau_.assign(num_segments(), Vec3::Zero());
+    has_external_ = true;
+  }
+  ext_f_[node] += f;
+}
+
+void Rod::add_external_torque(int segment, const Vec3& torque) {
+  if (segment < 0 || segment >= num_segments())
+    throw std::out_of_range("rod '" + name_ + "' has no segment " + std::to_string(segment));
+  if (!has_external_) add_external_force(0, Vec3::Zero());
+  ext_tau_[segment] += torque;
+}
+
+void Rod::clear_external() {
+  ext_f_.clear();
+  ext_tau_.clear();
+  has_external_ = false;
+}
+
 NodeDrive* Rod::node_drive(int node) {
   for (auto& d : node_drives_)
     if (d.node == node) return &d;
@@ -435,6 +459,10 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
     else
       tau_[l.index] += q_[l.index].conjugate() * (scale * l.value);
   }
+  if (has_external_) {
+    for (int i = r.node0; i < r.node1; ++i) f_[i] += ext_f_[i];
+    for (int s = r.seg0; s < r.seg1; ++s) tau_[s] += q_[s].conjugate() * ext_tau_[s];
+  }
 }
 
 // Semi-implicit Euler of the nodes and segments completed by segments [b0, b1) (block_range).
@@ -565,6 +593,20 @@ bool Rod::finite() const {
   for (size_t s = 0; s < q_.size(); ++s)
     if (!q_[s].coeffs().allFinite() || !w_[s].allFinite()) return false;
   return true;
+}
+
+double Rod::max_stretch_strain(int* segment) const {
+  double best = -INFINITY;
+  int at = 0;
+  for (int s = 0; s < num_segments(); ++s) {
+    const double e = stretch_strain(s);
+    if (e > best) {
+      best = e;
+      at = s;
+    }
+  }
+  if (segment) *segment = at;
+  return best;
 }
 
 double Rod::length() const {

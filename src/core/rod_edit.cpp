@@ -90,6 +90,7 @@ Material equivalent_material(const Section& s) {
   m.kappa = s.kappa;
   m.gamma_t = s.gamma_t;
   m.gamma_r = s.gamma_r;
+  m.max_strain = s.max_strain;
   return m;
 }
 

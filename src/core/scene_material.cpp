@@ -99,6 +99,7 @@ Section read_section(Map* rod) {
   const std::optional<double> gamma_t = non_negative_key(m, "gamma_t");
   const std::optional<double> gamma_r = non_negative_key(m, "gamma_r");
   const std::optional<double> tau = non_negative_key(m, "damping_time");
+  const std::optional<double> max_strain = non_negative_key(m, "max_strain");
   if (m) m->finish();
 
   const double area = kPi * radius * radius;
@@ -118,6 +119,7 @@ Section read_section(Map* rod) {
   mat.kappa = kappa ? *kappa : kappa_factor * 2.0 * mat.twist_stiffness / (radius * radius);
   mat.gamma_t = gamma_t ? *gamma_t : (tau ? *tau : tau_t) * mat.stretch_stiffness;
   mat.gamma_r = gamma_r ? *gamma_r : (tau ? *tau : tau_r) * mat.bend_stiffness;
+  mat.max_strain = max_strain ? *max_strain : preset ? preset->material.max_strain : 0.0;
   try {
     return make_section(mat, radius);
   } catch (const std::invalid_argument& e) {

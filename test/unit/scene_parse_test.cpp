@@ -298,3 +298,20 @@ TEST(SceneParse, WarnsAboveStabilityLimit) {
 
 }  // namespace
 }  // namespace corde
+
+namespace corde {
+namespace {
+
+TEST(SceneParse, MaxStrainFromPresetOrKey) {
+  const Scene a = parse_scene("rods:\n  - {material: soft_cable, shape: {type: straight}}\n");
+  EXPECT_DOUBLE_EQ(a.world.rods()[0].section().max_strain, 0.02);
+  const Scene b = parse_scene(
+      "rods:\n  - {material: {preset: steel_wire, max_strain: 0.003}, shape: {type: straight}}\n");
+  EXPECT_DOUBLE_EQ(b.world.rods()[0].section().max_strain, 0.003);
+  EXPECT_THROW(parse_scene("rods:\n  - {material: {preset: steel_wire, max_strain: -1}, "
+                           "shape: {type: straight}}\n"),
+               SceneError);
+}
+
+}  // namespace
+}  // namespace corde

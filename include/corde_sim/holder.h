@@ -1,0 +1,56 @@
+// Motion of a rigid holder (a gripper or an anchor) between the poses it is sent.
+//
+// Poses arrive at a few to a few hundred hertz while the rod steps at kilohertz. The holder
+// follows a reference that moves from where the holder was to each new goal over the interval
+// between inputs (one input of delay, no overshoot), and the holder itself tracks that reference
+// within a speed and an acceleration limit, linear and angular: a pose 1 m away, or one sent at
+// 10 kHz, becomes a bounded motion instead of a yank that the rod cannot follow.
+#pragma once
+
+#include <Eigen/Geometry>
+
+namespace corde {
+
+struct HolderLimits {
+  double max_speed = 2.0;                 // m/s
+  double max_acceleration = 50.0;         // m/s^2
+  double max_angular_speed = 20.0;        // rad/s
+  double max_angular_acceleration = 1e3;  // rad/s^2
+};
+
+// Which limits clipped the motion in one advance().
+struct HolderClip {
+  bool speed = false, acceleration = false;
+  bool any() const { return speed || acceleration; }
+};
+
+class HolderMotion {
+ public:
+  // Holds `pose` from now on, at rest.
+  void reset(const Eigen::Isometry3d& pose);
+  // A new goal at time `now`, reached by the reference `duration` seconds later (0: at once;
+  // the limits then shape the motion).
+  void set_goal(double now, const Eigen::Isometry3d& goal, double duration);
+  // Moves the holder from time t to t + h, tracking the reference within the limits.
+  HolderClip advance(double t, double h, const HolderLimits& limits);
+  // Stops where the holder is: the goal becomes the current pose.
+  void stop();
+
+  const Eigen::Isometry3d& pose() const { return pose_; }
+  const Eigen::Isometry3d& goal() const { return goal_; }
+  const Eigen::Vector3d& velocity() const { return v_; }          // world frame
+  const Eigen::Vector3d& angular_velocity() const { return w_; }  // world frame
+  // Reference pose at time t (the interpolation between the inputs, before the limits).
+  Eigen::Isometry3d reference(double t) const;
+  // True while the holder has not reached its goal (within 1e-9 m and rad) or still moves.
+  bool moving() const;
+
+ private:
+  Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
+  Eigen::Isometry3d start_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d goal_ = Eigen::Isometry3d::Identity();
+  double t0_ = 0.0, duration_ = 0.0;
+};
+
+}  // namespace corde
