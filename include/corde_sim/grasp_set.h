@@ -4,7 +4,8 @@
 // a force-torque sensor in the gripper would read).
 //
 // Per step: before_step() moves the holders and drives the held segments, World::step() steps,
-// after_step() accumulates the reactions.
+// after_step() accumulates the reactions. Every time argument is the world's own time
+// (World::time()), which before_step() also gets.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -82,8 +83,9 @@ class GraspSet {
   void before_step(World& world, double t, double h);
   void after_step(const World& world, double h);
 
-  // Mean reaction since the last call in the frame of the holder's current pose: the force the
-  // rod exerts on the holder and its torque about the holder's origin. False when no step was
+  // Mean reaction since the last call in the frame of the holder's current pose (holder_pose(),
+  // the twist turned in): the force the rod exerts on the holder and its torque about the
+  // holder's origin. False when no step was
   // taken since (nothing to report).
   bool take_reaction(const std::string& name, Vec3* force, Vec3* torque);
 

@@ -171,7 +171,7 @@ void GraspSet::before_step(World& world, double t, double h) {
     if (!g.held) continue;
     Rod& rod = world.rods()[g.rod];
     const int s = g.grasp.segment;
-    g.origin0 = g.holder.pose().translation();
+    g.origin0 = g.holder_pose().translation();
     for (int k = 0; k < 2; ++k) {
       g.x0[k] = rod.positions()[s + k];
       g.v0[k] = rod.velocities()[s + k];
@@ -219,7 +219,7 @@ void GraspSet::after_step(const World& world, double h) {
 bool GraspSet::take_reaction(const std::string& name, Vec3* force, Vec3* torque) {
   GraspState* g = find(name);
   if (!g || g->reaction_steps == 0) return false;
-  const Eigen::Matrix3d rt = g->holder.pose().linear().transpose();
+  const Eigen::Matrix3d rt = g->holder_pose().linear().transpose();
   *force = rt * (g->reaction_force_sum / g->reaction_steps);
   *torque = rt * (g->reaction_torque_sum / g->reaction_steps);
   g->reaction_force_sum.setZero();

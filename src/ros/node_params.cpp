@@ -63,6 +63,30 @@ double read_rate(const ros::NodeHandle& pnh, const std::string& name, double def
   return v;
 }
 
+// A list of n numbers (integers accepted), or false if the parameter is not set.
+bool read_numbers(const ros::NodeHandle& pnh, const std::string& name, size_t n,
+                  std::vector<double>* out) {
+  XmlRpc::XmlRpcValue x;
+  if (!pnh.getParam(name, x)) return false;
+  if (x.getType() != XmlRpc::XmlRpcValue::TypeArray || static_cast<size_t>(x.size()) != n)
+    bad(name, "must be a list of " + std::to_string(n) + " numbers");
+  out->resize(n);
+  for (size_t i = 0; i < n; ++i)
+    if (!take(x[static_cast<int>(i)], (*out)[i]) || !std::isfinite((*out)[i]))
+      bad(name, "must be a list of " + std::to_string(n) + " finite numbers");
+  return true;
+}
+
+// A positive finite number.
+double read_positive(const ros::NodeHandle& pnh, const std::string& name, double def,
+                     const char* unit) {
+  double v = def;
+  read(pnh, name, v, def);
+  if (!std::isfinite(v) || !(v > 0.0))
+    bad(name, "must be > 0 " + std::string(unit) + ", got " + num(v));
+  return v;
+}
+
 void check_frame(const std::string& name, const std::string& frame, bool allow_empty) {
   if (frame.empty() && !allow_empty) bad(name, "must not be empty");
   if (!frame.empty() && frame[0] == '/')
@@ -166,6 +190,28 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   read(pnh, "max_pose_age", p.max_pose_age, 1.0);
   if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
     bad("max_pose_age", "must be > 0 s, got " + num(p.max_pose_age));
+  p.max_frame_age = read_positive(pnh, "max_frame_age", 1.0, "s");
+  p.max_grasp_distance = read_positive(pnh, "max_grasp_distance", 0.05, "m");
+  p.holder_max_speed = read_positive(pnh, "holder_max_speed", 2.0, "m/s");
+  p.holder_max_acceleration = read_positive(pnh, "holder_max_acceleration", 50.0, "m/s^2");
+  p.holder_max_angular_speed = read_positive(pnh, "holder_max_angular_speed", 20.0, "rad/s");
+  p.holder_max_angular_acceleration =
+      read_positive(pnh, "holder_max_angular_acceleration", 1000.0, "rad/s^2");
+  p.max_node_speed = read_positive(pnh, "max_node_speed", 100.0, "m/s");
+  p.max_angular_speed = read_positive(pnh, "max_angular_speed", 1e5, "rad/s");
+  std::vector<double> v;
+  if (read_numbers(pnh, "workspace_min", 3, &v)) p.workspace_min << v[0], v[1], v[2];
+  if (read_numbers(pnh, "workspace_max", 3, &v)) p.workspace_max << v[0], v[1], v[2];
+  if (!(p.workspace_min.array() < p.workspace_max.array()).all())
+    bad("workspace_max", "must be above ~workspace_min in every coordinate");
+  std::string strain_action;
+  read<std::string>(pnh, "strain_action", strain_action, "warn");
+  if (strain_action == "warn")
+    p.strain_action = StrainAction::kWarn;
+  else if (strain_action == "slip")
+    p.strain_action = StrainAction::kSlip;
+  else
+    bad("strain_action", "must be warn or slip, got '" + strain_action + "'");
   read(pnh, "start_paused", p.start_paused, false);
   read(pnh, "status_period", p.status_period, 10.0);
   if (!std::isfinite(p.status_period) || p.status_period < 0.0)
@@ -189,6 +235,25 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
       }
       read<std::string>(pnh, key + "/frame", g.frame, "");
       if (g.source == GraspSource::kTf) check_frame(key + "/frame", g.frame, false);
+      // offset: [x, y, z] or [x, y, z, qx, qy, qz, qw], the segment's pose in the holder frame.
+      XmlRpc::XmlRpcValue off;
+      if (pnh.getParam(key + "/offset", off)) {
+        std::vector<double> o;
+        const size_t n = off.getType() == XmlRpc::XmlRpcValue::TypeArray ? off.size() : 0;
+        if (n != 3 && n != 7)
+          bad(key + "/offset", "must be [x, y, z] or [x, y, z, qx, qy, qz, qw]");
+        read_numbers(pnh, key + "/offset", n, &o);
+        g.has_offset = true;
+        g.offset.translation() << o[0], o[1], o[2];
+        if (n == 7) {
+          Eigen::Quaterniond q(o[6], o[3], o[4], o[5]);
+          if (std::abs(q.norm() - 1.0) > kQuaternionNormTolerance)
+            bad(key + "/offset",
+                "quaternion (qx, qy, qz, qw) must have unit norm, got " + num(q.norm()));
+          g.offset.linear() = q.normalized().toRotationMatrix();
+        }
+      }
+      read(pnh, key + "/snap", g.snap, false);
       p.grasps[it->first] = g;
     }
   }
@@ -210,11 +275,25 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
       "~marker_min_diameter = %g m",
       style.c_str(), p.show_frames ? "true" : "false", p.color_by_strain ? "true" : "false",
       p.marker_min_diameter);
-  ROS_INFO("corde_sim: ~max_pose_age = %g s, ~start_paused = %s", p.max_pose_age,
-           p.start_paused ? "true" : "false");
+  ROS_INFO("corde_sim: ~max_pose_age = %g s, ~max_frame_age = %g s, ~start_paused = %s",
+           p.max_pose_age, p.max_frame_age, p.start_paused ? "true" : "false");
+  ROS_INFO(
+      "corde_sim: holders: ~holder_max_speed = %g m/s, ~holder_max_acceleration = %g m/s^2, "
+      "~holder_max_angular_speed = %g rad/s, ~holder_max_angular_acceleration = %g rad/s^2",
+      p.holder_max_speed, p.holder_max_acceleration, p.holder_max_angular_speed,
+      p.holder_max_angular_acceleration);
+  ROS_INFO(
+      "corde_sim: ~workspace_min = [%g, %g, %g], ~workspace_max = [%g, %g, %g] m, "
+      "~max_grasp_distance = %g m, ~strain_action = %s, ~max_node_speed = %g m/s, "
+      "~max_angular_speed = %g rad/s",
+      p.workspace_min.x(), p.workspace_min.y(), p.workspace_min.z(), p.workspace_max.x(),
+      p.workspace_max.y(), p.workspace_max.z(), p.max_grasp_distance, strain_action.c_str(),
+      p.max_node_speed, p.max_angular_speed);
   for (const auto& g : p.grasps)
-    ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s", g.first.c_str(), to_string(g.second.source),
-             g.second.frame.empty() ? "" : ", frame ", g.second.frame.c_str());
+    ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s%s%s", g.first.c_str(),
+             to_string(g.second.source), g.second.frame.empty() ? "" : ", frame ",
+             g.second.frame.c_str(), g.second.has_offset ? ", offset given" : "",
+             g.second.snap ? ", snap" : "");
   return p;
 }
 

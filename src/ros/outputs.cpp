@@ -359,6 +359,7 @@ void fill_rod_states(const corde::World& world, WorldState* msg) {
     out.velocities.resize(n + 1);
     out.orientations.resize(n);
     out.angular_velocities.resize(n);
+    out.tension.resize(n);
     for (int i = 0; i <= n; ++i) {
       out.nodes[i] = point(rod.positions()[i]);
       const corde::Vec3& v = rod.velocities()[i];
@@ -376,7 +377,9 @@ void fill_rod_states(const corde::World& world, WorldState* msg) {
       out.angular_velocities[s].x = w.x();
       out.angular_velocities[s].y = w.y();
       out.angular_velocities[s].z = w.z();
+      out.tension[s] = rod.tension(s);
     }
+    out.max_strain = rod.max_stretch_strain();
     const corde::Energies e = rod.energies(world.gravity);
     out.kinetic_energy = e.kinetic();
     out.elastic_energy = e.elastic();

@@ -34,13 +34,6 @@ double thread_cpu_seconds() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-// Next deadline of a periodic output: one period on, or one period from now after a stall
-// (no bursts to catch up).
-double next_deadline(double deadline, double period, double now) {
-  deadline += period;
-  return deadline < now ? now + period : deadline;
-}
-
 }  // namespace
 
 SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {
@@ -60,7 +53,13 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "node to publish /clock; stamps are that clock's time at start-up plus simulation "
         "time");
 
+  validity_.max_speed = params_.max_node_speed;
+  validity_.max_angular_speed = params_.max_angular_speed;
   corde::Scene scene;
+  std::string resolve_error;
+  const std::string scene_file = resolve_scene(params_.scene, &resolve_error);
+  if (scene_file.empty()) throw std::invalid_argument("parameter ~scene: " + resolve_error);
+  params_.scene = scene_file;
   try {
     scene = corde::load_scene(params_.scene, params_.overrides);
   } catch (const std::exception& e) {
@@ -106,6 +105,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   services_.push_back(pnh_.advertiseService("step", &SimNode::on_step, this));
   services_.push_back(pnh_.advertiseService("grasp", &SimNode::on_grasp, this));
   services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
+  services_.push_back(pnh_.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
   diagnostics_->setHardwareID("corde_sim");
@@ -114,7 +114,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
   paused_ = params_.start_paused;
   ROS_INFO("corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), time step %g s, h/h_crit %.3f%s",
-           initial_.name.c_str(), world_.rods().size(), grasps_.size(), world_.time_step,
+           initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(), world_.time_step,
            stability_margin_, paused_ ? ", paused" : "");
 }
 
@@ -147,10 +147,12 @@ long SimNode::run_steps(long n, double deadline) {
   const double t0 = wall_seconds();
   const double c0 = thread_cpu_seconds();
   long k = 0;
+  const bool grasps = !grasps_.empty();
   for (; k < n; ++k) {
     if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
-    if (!grasps_.empty()) hold_all(sim_time() + h, h);
+    if (grasps) grasps_.before_step(world_, world_.time(), h);
     world_.step();
+    if (grasps) grasps_.after_step(world_, h);
   }
   const double dt = wall_seconds() - t0;
   step_cpu_total_ += thread_cpu_seconds() - c0;
@@ -162,6 +164,7 @@ long SimNode::run_steps(long n, double deadline) {
 }
 
 void SimNode::advance(double now) {
+  apply_inputs();
   if (pacer_.paced()) {
     const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
     // A batch may take a few loop periods; beyond that the simulation cannot keep up, and the
@@ -172,41 +175,61 @@ void SimNode::advance(double now) {
     if (lagging_) pacer_.anchor(sim_time(), wall_seconds());
   } else {
     // As fast as possible, in slices short enough to serve callbacks and outputs on time.
-    const double slice_end = std::min(now + 0.005, next_output_due());
+    const double slice_end = std::min(now + 0.005, schedule_.next_due());
     run_steps(std::numeric_limits<long>::max(), std::max(slice_end, now));
   }
-  check_finite();
+  if (check_state()) check_holders_and_strain();
 }
 
-double SimNode::next_output_due() const {
-  double t = std::numeric_limits<double>::infinity();
-  if (params_.tf_rate > 0.0) t = std::min(t, next_tf_);
-  if (params_.marker_rate > 0.0) t = std::min(t, next_marker_);
-  return std::min(t, next_stats_);
+void SimNode::take_snapshot() {
+  last_good_.world = world_;
+  last_good_.grasps = grasps_;
 }
 
-void SimNode::check_finite() {
-  if (world_.finite()) return;
-  const double t = sim_time();
-  world_ = last_good_;
+bool SimNode::check_state() {
+  const std::string problem = corde::validity_problem(world_, validity_);
+  if (problem.empty()) return true;
+  // The step has lost stability (or an input drove it there): go back to the last state that
+  // passed this check, with the holders stopped where they were then. If that keeps happening,
+  // also drop the velocities, which may carry the instability.
+  const double t = sim_time(), wall = wall_seconds();
+  world_ = last_good_.world;
+  grasps_ = last_good_.grasps;
+  grasps_.stop_all();
+  inputs_.clear();
+  recovery_walls_.push_back(wall);
+  recovery_walls_.erase(std::remove_if(recovery_walls_.begin(), recovery_walls_.end(),
+                                       [&](double w) { return w < wall - 1.0; }),
+                        recovery_walls_.end());
+  const bool repeated = recovery_walls_.size() >= 3;
+  if (repeated) {
+    for (corde::Rod& rod : world_.rods()) {
+      for (auto& v : rod.velocities()) v.setZero();
+      for (auto& w : rod.angular_velocities()) w.setZero();
+    }
+  }
   time_offset_ = t - world_.time();  // the clock keeps going forward
   ++recoveries_;
+  last_problem_ = problem;
   pacer_.anchor(sim_time(), wall_seconds());
-  ROS_ERROR_THROTTLE(1.0,
-                     "corde_sim: the state became non-finite at t = %.6f s; restored the last good "
-                     "state (h/h_crit = %.2f, limiting rod '%s'; a smaller time_step may help)",
-                     t, stability_margin_, limiting_rod_.c_str());
+  ROS_ERROR_THROTTLE(
+      1.0,
+      "corde_sim: the state became invalid at t = %.6f s (%s); restored the last good "
+      "state%s (h/h_crit = %.2f, limiting rod '%s'; a smaller time_step may help)",
+      t, problem.c_str(), repeated ? " at rest (3 recoveries within 1 s)" : "", stability_margin_,
+      limiting_rod_.c_str());
+  return false;
 }
 
 std::vector<GraspView> SimNode::grasp_views() const {
   std::vector<GraspView> views;
-  const double t = sim_time();
-  for (const auto& kv : grasps_) {
+  for (const auto& kv : grasps_.grasps()) {
     if (!kv.second.held) continue;
     GraspView v;
     v.name = kv.first;
-    v.id = kv.second.marker_id;
-    v.pose = holder_pose(kv.second, t);
+    auto w = wiring_.find(kv.first);
+    v.id = w == wiring_.end() ? 0 : w->second.marker_id;
+    v.pose = kv.second.holder_pose();
     views.push_back(v);
   }
   return views;
@@ -300,39 +323,42 @@ void SimNode::publish_clock() {
   clock_pub_.publish(c);
 }
 
-void SimNode::publish_due(double now, bool force) {
+void SimNode::publish_due(double now) {
   // With /clock from this node, stamp 0 would read as "latest" (tf) or "unset": wait for t > 0.
   if (params_.publish_clock && sim_time() <= 0.0) return;
   bool any = false;
   if (params_.publish_clock) publish_clock();
-  if (params_.tf_rate > 0.0 && (force || now >= next_tf_)) {
+  if (schedule_.take(OutputSchedule::kTf, now)) {
     publish_tf();
-    next_tf_ = next_deadline(next_tf_, 1.0 / params_.tf_rate, now);
     any = true;
   }
-  if (params_.marker_rate > 0.0 && (force || now >= next_marker_)) {
+  if (schedule_.take(OutputSchedule::kMarkers, now)) {
     publish_markers();
-    next_marker_ = next_deadline(next_marker_, 1.0 / params_.marker_rate, now);
     any = true;
   }
-  // Statistics follow the state message, or run at 2 Hz when it is off.
-  const double stats_period = params_.state_rate > 0.0 ? 1.0 / params_.state_rate : 0.5;
-  if (force || now >= next_stats_) {
+  // Statistics and reactions follow the state message (which runs at 2 Hz unpublished when off).
+  if (schedule_.take(OutputSchedule::kState, now)) {
     update_stats(now);
     if (params_.state_rate > 0.0) publish_state();
-    next_stats_ = next_deadline(next_stats_, stats_period, now);
+    publish_reactions();
     any = true;
   }
-  if (any) last_good_ = world_;  // published, so known finite: the state to fall back on
+  // What was published passed check_state(): the state to fall back on.
+  if (any) take_snapshot();
 }
 
 void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   using diagnostic_msgs::DiagnosticStatus;
   const double target = params_.real_time_factor;
   if (recoveries_ > recoveries_reported_) {
-    stat.summaryf(DiagnosticStatus::ERROR, "state became non-finite %d time(s); restored",
-                  recoveries_ - recoveries_reported_);
+    stat.summaryf(DiagnosticStatus::ERROR,
+                  "state became invalid (non-finite or blown up) %d time(s); restored the last "
+                  "good state (%s)",
+                  recoveries_ - recoveries_reported_, last_problem_.c_str());
     recoveries_reported_ = recoveries_;
+  } else if (!strain_warning_.empty()) {
+    stat.summary(DiagnosticStatus::WARN, strain_warning_);
+    strain_warning_.clear();
   } else if (stability_margin_ > 1.0) {
     stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
                   stability_margin_);
@@ -352,8 +378,9 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("stability margin h/h_crit", stability_margin_);
   stat.add("stability limiting rod", limiting_rod_);
   stat.add("rods", world_.rods().size());
-  stat.add("grasps", grasps_.size());
-  stat.add("recoveries from non-finite state", recoveries_);
+  stat.add("grasps", grasps_.grasps().size());
+  stat.add("recoveries from an invalid state", recoveries_);
+  stat.add("last invalid state", last_problem_);
 }
 
 // A line a user watching the console (make run) can follow without rqt or rostopic.
@@ -370,7 +397,10 @@ int SimNode::run() {
   ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
   double now = wall_seconds();
   pacer_.reset(params_.real_time_factor, sim_time(), now);
-  next_tf_ = next_marker_ = next_stats_ = now;
+  schedule_.set_rate(OutputSchedule::kTf, params_.tf_rate);
+  schedule_.set_rate(OutputSchedule::kMarkers, params_.marker_rate);
+  schedule_.set_rate(OutputSchedule::kState, params_.state_rate > 0.0 ? params_.state_rate : 2.0);
+  schedule_.start(now);
   sim_at_stats_ = sim_time();
   wall_at_stats_ = now;
   const double start_wall = now, start_cpu = process_cpu_seconds(), start_sim = sim_time();
@@ -385,7 +415,7 @@ int SimNode::run() {
     now = wall_seconds();
     if (!paused_) advance(now);
     now = wall_seconds();
-    publish_due(now, false);
+    publish_due(now);
     diagnostics_->update();
     if (params_.status_period > 0.0 && now >= next_status_) {
       if (next_status_ > 0.0) log_status();  // none at start: nothing has run yet
@@ -397,9 +427,9 @@ int SimNode::run() {
     if (now >= bench_end) break;
     double wake = now;
     if (paused_)
-      wake = std::min(next_output_due(), now + 0.05);  // rod_state keeps its rate while paused
+      wake = std::min(schedule_.next_due(), now + 0.05);  // rod_state keeps its rate while paused
     else if (pacer_.paced())
-      wake = std::min(next_output_due(), now + 1.0 / params_.loop_rate);
+      wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
   }
   if (params_.benchmark > 0.0) {

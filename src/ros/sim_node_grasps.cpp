@@ -1,7 +1,12 @@
 // SimNode: scenes, grasps and their inputs (pose, wrench and twist-rate topics, tf frames).
+// Callbacks check a message and queue it as an InputEvent; apply_inputs() hands the queue to the
+// library's GraspSet at the start of the next batch of steps.
+#include <ros/package.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <fstream>
 
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
@@ -17,13 +22,6 @@ bool valid_name(const std::string& s) {
   });
 }
 
-// Material coordinate (rest arc length) of a segment's midpoint.
-double segment_arc_length(const corde::Rod& rod, int segment) {
-  double s = 0.0;
-  for (int i = 0; i < segment; ++i) s += rod.rest_lengths()[i];
-  return s + 0.5 * rod.rest_lengths()[segment];
-}
-
 Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t) {
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   const auto& r = t.transform.rotation;
@@ -33,10 +31,37 @@ Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t) {
   return out;
 }
 
-// First pose input of a grasp: the holder glides there over this long instead of jumping.
+bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
+
+// First pose input of a grasp: the holder's reference glides there over this long instead of
+// jumping (the holder limits shape the motion further).
 constexpr double kFirstInputGlide = 0.1;  // s
 
 }  // namespace
+
+std::string SimNode::resolve_scene(const std::string& path, std::string* error) const {
+  if (path.empty()) {
+    *error = "no scene file given";
+    return "";
+  }
+  if (path[0] == '/') {
+    if (file_exists(path)) return path;
+    *error = "scene file '" + path + "' does not exist";
+    return "";
+  }
+  // The node's working directory is ROS's (~/.ros), which says nothing to a user: a relative path
+  // is looked up in the package and its scene folder.
+  const std::string pkg = ros::package::getPath("corde_sim");
+  if (!pkg.empty()) {
+    for (const std::string& c : {pkg + "/" + path, pkg + "/config/scenes/" + path})
+      if (file_exists(c)) return c;
+  }
+  *error = "scene file '" + path + "' not found: a relative path is looked up in the package" +
+           (pkg.empty() ? std::string(" (whose path is unknown)")
+                        : " folder " + pkg + " and in " + pkg + "/config/scenes") +
+           "; give an absolute path otherwise";
+  return "";
+}
 
 std::string SimNode::install_scene(corde::Scene scene, const std::string& path) {
   // Check every grasp before anything changes, so that a bad scene leaves the node as it was.
@@ -50,11 +75,23 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
       return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
   }
   for (const std::string& w : scene.warnings) ROS_WARN("corde_sim: scene: %s", w.c_str());
-  grasps_.clear();  // also ends their subscriptions
+  grasps_.clear();
+  // Topics of grasps the new scene has too stay subscribed (a reset does not make publishers
+  // reconnect); the others end.
+  for (auto it = wiring_.begin(); it != wiring_.end();) {
+    const bool kept = std::any_of(scene.grasps.begin(), scene.grasps.end(),
+                                  [&](const corde::GraspSpec& g) { return g.name == it->first; });
+    it = kept ? std::next(it) : wiring_.erase(it);
+  }
+  inputs_.clear();
   world_ = scene.world;
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);
+  grasps_.limits.max_speed = params_.holder_max_speed;
+  grasps_.limits.max_acceleration = params_.holder_max_acceleration;
+  grasps_.limits.max_angular_speed = params_.holder_max_angular_speed;
+  grasps_.limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
   for (const corde::GraspSpec& spec : initial_.grasps) {
     auto p = params_.grasps.find(spec.name);
     const GraspSource source = p == params_.grasps.end() ? GraspSource::kTopic : p->second.source;
@@ -63,7 +100,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
     const std::string e = add_grasp(spec, source, frame, /*from_scene=*/true, &segment);
     if (!e.empty()) ROS_WARN("corde_sim: scene grasp not made: %s", e.c_str());
   }
-  last_good_ = world_;
+  take_snapshot();
   refresh_layout();
   return "";
 }
@@ -73,185 +110,185 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   *segment = -1;
   if (!valid_name(spec.name))
     return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
-  auto existing = grasps_.find(spec.name);
-  if (existing != grasps_.end() && existing->second.held)
-    return "grasp '" + spec.name + "' already holds rod '" + existing->second.grasp.rod +
-           "'; release it first";
-  int rod_index = -1;
-  for (size_t i = 0; i < world_.rods().size(); ++i)
-    if (world_.rods()[i].name() == spec.rod) rod_index = static_cast<int>(i);
-  if (rod_index < 0) return "no rod named '" + spec.rod + "'";
-  corde::Rod& rod = world_.rods()[rod_index];
-  int seg;
-  try {
-    seg = corde::grasp_segment(rod, spec);
-  } catch (const std::exception& e) {
-    return "grasp '" + spec.name + "': " + e.what();
-  }
-  // A boundary condition (clamp, fixed or driven node or segment) there would be replaced by the
-  // grasp's drives and lost on release. Grasp drives are the kTarget ones.
-  for (int node : {seg, seg + 1}) {
-    const corde::NodeDrive* d = rod.node_drive(node);
-    if (d && d->kind != corde::NodeDrive::Kind::kTarget)
-      return "grasp '" + spec.name + "': node " + std::to_string(node) + " of segment " +
-             std::to_string(seg) + " has a boundary condition";
-  }
-  const corde::SegmentDrive* sd = rod.segment_drive(seg);
-  if (spec.hold_orientation && sd && sd->kind != corde::SegmentDrive::Kind::kTarget)
-    return "grasp '" + spec.name + "': segment " + std::to_string(seg) +
-           " has a boundary condition";
   if (source == GraspSource::kTf && frame.empty())
     return "grasp '" + spec.name + "': source tf needs a frame";
+  const corde::GraspState* held = grasps_.find(spec.name);
+  if (held && held->held)
+    return "grasp '" + spec.name + "' already holds rod '" + held->grasp.rod +
+           "'; release it first";
+  int rod = -1, seg = -1;
+  std::string error = grasps_.check(world_, spec, &rod, &seg);
+  if (!error.empty()) return "grasp '" + spec.name + "': " + error;
 
-  Eigen::Isometry3d holder = corde::segment_pose(rod, seg);
+  GraspSourceParam param;
+  auto p = params_.grasps.find(spec.name);
+  if (p != params_.grasps.end()) param = p->second;
+  // Without a frame to follow, the holder starts where the offset puts it relative to the segment
+  // (the segment itself when no offset is given): nothing moves.
+  Eigen::Isometry3d holder = corde::segment_pose(world_.rods()[rod], seg);
+  if (param.has_offset) holder = holder * param.offset.inverse();
+  const Eigen::Isometry3d* offset = nullptr;
   bool attached = true;
   if (source == GraspSource::kTf) {
     Eigen::Isometry3d f;
-    std::string error;
     if (lookup_world(frame, ros::Time(0), &f, &error)) {
       holder = f;
+      if (param.snap) offset = &param.offset;
     } else if (from_scene) {
       // The frame may not be published yet: hold the segment where it is until it appears.
       attached = false;
       ROS_WARN(
-          "corde_sim: grasp '%s' follows tf frame '%s', not available yet (%s); holding "
-          "the segment in place until it is",
+          "corde_sim: grasp '%s' follows tf frame '%s', not available yet (%s); holding the "
+          "segment in place until it is",
           spec.name.c_str(), frame.c_str(), error.c_str());
     } else {
-      return "grasp '" + spec.name + "': unknown frame '" + frame + "': " + error;
+      return "grasp '" + spec.name + "': " + error;
     }
   }
+  error = grasps_.add(world_, spec, holder, offset, world_.time());
+  if (!error.empty()) return "grasp '" + spec.name + "': " + error;
 
-  ActiveGrasp& g = grasps_[spec.name];
-  const bool reuse = existing != grasps_.end();
-  g.spec = spec;
-  g.grasp = corde::make_grasp(rod, spec, holder);
-  g.source = source;
-  g.frame = frame;
-  g.held = true;
-  g.attached = attached;
-  g.rod_index = rod_index;
-  g.holder.reset(holder);
-  g.last_input_time = -1.0;
-  g.twist_rate = g.twist_angle = 0.0;
-  g.arc_length = segment_arc_length(rod, g.grasp.segment);
-  if (!reuse) {
-    g.marker_id = next_marker_id_++;
-    const std::string base = "grasps/" + spec.name + "/";
-    const std::string name = spec.name;
-    if (source == GraspSource::kTopic)
-      g.pose_sub = nh_.subscribe<geometry_msgs::PoseStamped>(
-          base + "pose", 10,
-          boost::function<void(const geometry_msgs::PoseStampedConstPtr&)>(
-              [this, name](const geometry_msgs::PoseStampedConstPtr& m) { on_pose(name, m); }));
-    g.wrench_sub = nh_.subscribe<geometry_msgs::WrenchStamped>(
-        base + "wrench", 10,
-        boost::function<void(const geometry_msgs::WrenchStampedConstPtr&)>(
-            [this, name](const geometry_msgs::WrenchStampedConstPtr& m) { on_wrench(name, m); }));
-    g.twist_sub = nh_.subscribe<std_msgs::Float64>(
-        base + "twist_rate", 10,
-        boost::function<void(const std_msgs::Float64ConstPtr&)>(
-            [this, name](const std_msgs::Float64ConstPtr& m) { on_twist_rate(name, m); }));
-  } else if (source != GraspSource::kTopic) {
-    g.pose_sub.shutdown();
-  } else if (!g.pose_sub) {
-    const std::string name = spec.name;
-    g.pose_sub = nh_.subscribe<geometry_msgs::PoseStamped>(
-        "grasps/" + name + "/pose", 10,
-        boost::function<void(const geometry_msgs::PoseStampedConstPtr&)>(
-            [this, name](const geometry_msgs::PoseStampedConstPtr& m) { on_pose(name, m); }));
-  }
-  if (!reuse || g.load_index < 0) {
-    g.load_index = static_cast<int>(rod.loads().size());
-    for (int k = 0; k < 3; ++k) {
-      corde::Load load;
-      load.kind = k < 2 ? corde::Load::Kind::kForce : corde::Load::Kind::kTorque;
-      rod.add_load(load);
-    }
-  }
-  set_wrench_loads(&g);
-  *segment = g.grasp.segment;
+  GraspWiring& w = wiring_[spec.name];
+  if (w.marker_id == 0) w.marker_id = ++next_marker_id_;
+  w.source = source;
+  w.frame = frame;
+  w.attached = attached;
+  w.has_offset = param.has_offset;
+  w.offset = param.offset;
+  w.snap = param.snap;
+  w.last_input_time = -1.0;
+  wire_grasp(spec.name, &w);
+  *segment = seg;
   return "";
 }
 
-void SimNode::set_wrench_loads(ActiveGrasp* g) {
-  // The force acts at the grasp point (the segment's midpoint): half on each of its nodes.
-  corde::Rod& rod = world_.rods()[g->rod_index];
-  if (g->load_index < 0 || g->load_index + 2 >= static_cast<int>(rod.loads().size())) return;
-  const int s = g->grasp.segment;
-  corde::Load* l = &rod.loads()[g->load_index];
-  l[0].index = s;
-  l[0].value = 0.5 * g->force;
-  l[1].index = s + 1;
-  l[1].value = 0.5 * g->force;
-  l[2].index = s;
-  l[2].value = g->torque;
+void SimNode::wire_grasp(const std::string& name, GraspWiring* w) {
+  const std::string base = "grasps/" + name + "/";
+  if (w->source != GraspSource::kTopic) {
+    w->pose_sub.shutdown();
+  } else if (!w->pose_sub) {
+    w->pose_sub = nh_.subscribe<geometry_msgs::PoseStamped>(
+        base + "pose", 10,
+        boost::function<void(const geometry_msgs::PoseStampedConstPtr&)>(
+            [this, name](const geometry_msgs::PoseStampedConstPtr& m) { on_pose(name, m); }));
+  }
+  if (!w->wrench_sub)
+    w->wrench_sub = nh_.subscribe<geometry_msgs::WrenchStamped>(
+        base + "wrench", 10,
+        boost::function<void(const geometry_msgs::WrenchStampedConstPtr&)>(
+            [this, name](const geometry_msgs::WrenchStampedConstPtr& m) { on_wrench(name, m); }));
+  if (!w->twist_sub)
+    w->twist_sub = nh_.subscribe<std_msgs::Float64>(
+        base + "twist_rate", 10,
+        boost::function<void(const std_msgs::Float64ConstPtr&)>(
+            [this, name](const std_msgs::Float64ConstPtr& m) { on_twist_rate(name, m); }));
+  if (!w->reaction_pub)
+    w->reaction_pub = nh_.advertise<geometry_msgs::WrenchStamped>(base + "reaction", 10);
 }
 
-void SimNode::remake_grasps_on(const std::string& rod_name) {
-  // After a resample the segment indices changed: grasp again at the same material coordinate,
-  // holding the holder where it is (make_grasp records the new offset, so nothing jumps).
-  for (auto& kv : grasps_) {
-    ActiveGrasp& g = kv.second;
-    if (g.grasp.rod != rod_name) continue;
-    corde::Rod& rod = world_.rods()[g.rod_index];
-    if (g.held) {
-      const Eigen::Isometry3d holder = holder_pose(g, sim_time());
-      g.spec.place = corde::GraspSpec::Place::kArcLength;
-      g.spec.value = g.arc_length;
-      g.grasp = corde::make_grasp(rod, g.spec, holder);
-      g.holder.reset(holder);
-      g.twist_angle = 0.0;
-      corde::hold(rod, g.grasp, holder);
+bool SimNode::own_frame(const std::string& frame, Eigen::Isometry3d* out) const {
+  // The frames this node publishes itself never enter its tf buffer (it skips its own /tf).
+  const std::string& prefix = params_.frame_prefix;
+  if (frame.compare(0, prefix.size(), prefix) != 0) return false;
+  const std::string rest = frame.substr(prefix.size());
+  if (rest.compare(0, 6, "grasp/") == 0) {
+    const corde::GraspState* g = grasps_.find(rest.substr(6));
+    if (!g || !g->held) return false;
+    *out = g->holder_pose();
+    return true;
+  }
+  for (const corde::Rod& rod : world_.rods()) {
+    const std::string& name = rod.name();
+    if (rest.compare(0, name.size(), name) != 0) continue;
+    const std::string sub = rest.substr(name.size());
+    const int n = rod.num_segments();
+    int node = -1, seg = -1;
+    if (sub.empty()) {
+      node = 0;
+    } else if (sub == "/tip") {
+      node = n;
+    } else if (sub.compare(0, 5, "/seg_") == 0 && sub.size() > 5) {
+      seg = std::atoi(sub.c_str() + 5);
+      if (seg < 0 || seg >= n || std::to_string(seg) != sub.substr(5)) return false;
+      *out = corde::segment_pose(rod, seg);
+      return true;
+    } else if (sub.compare(0, 6, "/node_") == 0 && sub.size() > 6) {
+      node = std::atoi(sub.c_str() + 6);
+      if (node < 0 || node > n || std::to_string(node) != sub.substr(6)) return false;
     } else {
-      corde::GraspSpec spec = g.spec;
-      spec.place = corde::GraspSpec::Place::kArcLength;
-      spec.value = g.arc_length;
-      g.grasp.segment = corde::grasp_segment(rod, spec);
+      continue;
     }
-    set_wrench_loads(&g);
+    *out = Eigen::Isometry3d::Identity();
+    out->linear() = rod.orientations()[std::min(node, n - 1)].normalized().toRotationMatrix();
+    out->translation() = rod.positions()[node];
+    return true;
   }
-}
-
-Eigen::Isometry3d SimNode::holder_pose(const ActiveGrasp& g, double t) const {
-  Eigen::Isometry3d h = g.holder.at(t);
-  if (g.twist_angle != 0.0) {
-    // Turn the held segment about its own tangent (d3): holder * offset * Rz * offset^-1.
-    const Eigen::Isometry3d spin(Eigen::AngleAxisd(g.twist_angle, Eigen::Vector3d::UnitZ()));
-    h = h * g.grasp.offset * spin * g.grasp.offset.inverse();
-  }
-  return h;
-}
-
-void SimNode::hold_all(double t_end, double h) {
-  for (auto& kv : grasps_) {
-    ActiveGrasp& g = kv.second;
-    if (!g.held) continue;
-    if (g.twist_rate != 0.0)
-      g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
-    corde::hold(world_.rods()[g.rod_index], g.grasp, holder_pose(g, t_end));
-  }
+  return false;
 }
 
 bool SimNode::lookup_world(const std::string& frame, const ros::Time& stamp, Eigen::Isometry3d* out,
                            std::string* error) const {
-  if (frame.empty() || frame == params_.world_frame) {
+  if (frame.empty()) {
+    *error = "frame_id is empty: say which frame it is in (e.g. '" + params_.world_frame + "')";
+    return false;
+  }
+  if (frame == params_.world_frame) {
     *out = Eigen::Isometry3d::Identity();
     return true;
   }
+  if (own_frame(frame, out)) return true;
+  const std::string& world = params_.world_frame;
+  if (!tf_buffer_->_frameExists(frame)) {
+    *error = "frame '" + frame + "' is unknown: no transform to or from it has been received";
+    return false;
+  }
+  std::string why;
+  if (!tf_buffer_->canTransform(world, frame, ros::Time(0), &why)) {
+    *error = "frame '" + frame + "' is not connected to the world frame '" + world + "' in tf" +
+             (tf_buffer_->_frameExists(world)
+                  ? std::string(": ") + why
+                  : " (nothing links any frame to '" + world +
+                        "' yet; the rods' own frames are published by this node under it)");
+    return false;
+  }
   try {
     geometry_msgs::TransformStamped t;
-    try {
-      t = tf_buffer_->lookupTransform(params_.world_frame, frame, stamp);
-    } catch (const tf2::ExtrapolationException&) {
-      t = tf_buffer_->lookupTransform(params_.world_frame, frame, ros::Time(0));
+    bool latest = stamp.isZero();
+    if (!latest) {
+      try {
+        t = tf_buffer_->lookupTransform(world, frame, stamp);
+      } catch (const tf2::ExtrapolationException&) {
+        latest = true;
+      }
+    }
+    if (latest) {
+      t = tf_buffer_->lookupTransform(world, frame, ros::Time(0));
+      // Static chains have stamp 0; a dynamic frame whose publisher stopped is not used.
+      const double age = (ros::Time::now() - t.header.stamp).toSec();
+      if (!t.header.stamp.isZero() && age > params_.max_frame_age) {
+        *error = "frame '" + frame + "' was last published " + num(age) +
+                 " s ago (~max_frame_age " + num(params_.max_frame_age) + " s)";
+        return false;
+      }
     }
     *out = to_eigen(t);
     return true;
   } catch (const tf2::TransformException& e) {
-    *error = e.what();
+    *error = "frame '" + frame + "': " + e.what();
     return false;
   }
+}
+
+std::string SimNode::check_workspace(const Eigen::Vector3d& p) const {
+  if ((p.array() >= params_.workspace_min.array()).all() &&
+      (p.array() <= params_.workspace_max.array()).all())
+    return "";
+  const Eigen::Vector3d& a = params_.workspace_min;
+  const Eigen::Vector3d& b = params_.workspace_max;
+  return "position (" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) +
+         ") in the world frame is outside the workspace [" + num(a.x()) + ", " + num(b.x()) +
+         "] x [" + num(a.y()) + ", " + num(b.y()) + "] x [" + num(a.z()) + ", " + num(b.z()) +
+         "] m (~workspace_min, ~workspace_max)";
 }
 
 void SimNode::on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static) {
@@ -276,43 +313,54 @@ double SimNode::ros_to_sim_interval(double ros_seconds) const {
 }
 
 void SimNode::update_tf_holders() {
-  for (auto& kv : grasps_) {
-    ActiveGrasp& g = kv.second;
-    if (!g.held || g.source != GraspSource::kTf) continue;
-    geometry_msgs::TransformStamped t;
-    try {
-      t = tf_buffer_->lookupTransform(params_.world_frame, g.frame, ros::Time(0));
-    } catch (const tf2::TransformException& e) {
-      ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' cannot follow frame '%s': %s", kv.first.c_str(),
-                        g.frame.c_str(), e.what());
+  for (auto& kv : wiring_) {
+    GraspWiring& w = kv.second;
+    const corde::GraspState* g = grasps_.find(kv.first);
+    if (w.source != GraspSource::kTf || !g || !g->held) continue;
+    Eigen::Isometry3d f;
+    std::string error;
+    if (!lookup_world(w.frame, ros::Time(0), &f, &error)) {
+      // Holds where it is: a stale or vanished frame is not followed. (A scene grasp still waiting
+      // for its frame said so when it was made.)
+      if (w.attached)
+        ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' holds still: %s", kv.first.c_str(),
+                          error.c_str());
       continue;
     }
-    const double stamp = t.header.stamp.toSec();
-    if (stamp <= g.last_input_time) continue;  // nothing new
-    const Eigen::Isometry3d f = to_eigen(t);
-    if (!f.matrix().allFinite()) continue;
-    corde::Rod& rod = world_.rods()[g.rod_index];
-    if (!g.attached) {
-      corde::release(rod, g.grasp);
-      g.grasp = corde::make_grasp(rod, g.spec, f);
-      g.holder.reset(f);
-      g.attached = true;
-      ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", kv.first.c_str(), g.frame.c_str());
-    } else {
-      const double interval = g.last_input_time < 0.0 ? 0.0 : stamp - g.last_input_time;
-      g.holder.set_goal(sim_time(), f, ros_to_sim_interval(interval));
+    geometry_msgs::TransformStamped t;
+    double stamp = 0.0;
+    try {
+      stamp = tf_buffer_->lookupTransform(params_.world_frame, w.frame, ros::Time(0))
+                  .header.stamp.toSec();
+    } catch (const tf2::TransformException&) {
+      stamp = ros::Time::now().toSec();  // one of our own frames: always current
     }
-    g.last_input_time = stamp;
+    if (stamp <= w.last_input_time) continue;  // nothing new
+    if (!f.matrix().allFinite()) continue;
+    error = check_workspace(f.translation());
+    if (!error.empty()) {
+      ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' holds still: frame '%s': %s", kv.first.c_str(),
+                        w.frame.c_str(), error.c_str());
+      continue;
+    }
+    if (!w.attached) {
+      grasps_.attach(world_, kv.first, f, w.snap ? &w.offset : nullptr, world_.time());
+      w.attached = true;
+      ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", kv.first.c_str(), w.frame.c_str());
+    } else {
+      const double interval = w.last_input_time < 0.0 ? 0.0 : stamp - w.last_input_time;
+      grasps_.set_goal(kv.first, world_.time(), f, ros_to_sim_interval(interval));
+    }
+    w.last_input_time = stamp;
   }
 }
 
 void SimNode::on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg) {
-  auto it = grasps_.find(name);
-  if (it == grasps_.end() || !it->second.held) {
+  const corde::GraspState* g = grasps_.find(name);
+  if (!g || !g->held) {
     ROS_WARN_THROTTLE(2.0, "corde_sim: pose for grasp '%s' ignored: it is released", name.c_str());
     return;
   }
-  ActiveGrasp& g = it->second;
   const ros::Time now = ros::Time::now();
   const bool zero = msg->header.stamp.isZero();
   std::string error =
@@ -322,29 +370,28 @@ void SimNode::on_pose(const std::string& name, const geometry_msgs::PoseStampedC
                        msg->pose.orientation.z);
   if (error.empty()) error = check_pose(p, &q);
   Eigen::Isometry3d to_world;
-  if (error.empty() && !lookup_world(msg->header.frame_id, msg->header.stamp, &to_world, &error))
-    error = "unknown frame '" + msg->header.frame_id + "': " + error;
-  const double t_in = zero ? now.toSec() : msg->header.stamp.toSec();
-  if (error.empty() && g.last_input_time >= 0.0 && t_in < g.last_input_time)
-    error = "stamp older than the previous pose";
+  if (error.empty()) lookup_world(msg->header.frame_id, msg->header.stamp, &to_world, &error);
+  InputEvent e;
+  e.kind = InputEvent::Kind::kPose;
+  e.grasp = name;
+  if (error.empty()) {
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = q.toRotationMatrix();
+    pose.translation() = p;
+    e.pose = to_world * pose;
+    error = check_workspace(e.pose.translation());
+  }
   if (!error.empty()) {
     ROS_WARN_THROTTLE(1.0, "corde_sim: pose for grasp '%s' rejected: %s", name.c_str(),
                       error.c_str());
     return;
   }
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = q.toRotationMatrix();
-  pose.translation() = p;
-  const double interval =
-      g.last_input_time < 0.0 ? kFirstInputGlide : ros_to_sim_interval(t_in - g.last_input_time);
-  g.last_input_time = t_in;
-  g.holder.set_goal(sim_time(), to_world * pose, interval);
+  e.input_time = zero ? now.toSec() : msg->header.stamp.toSec();
+  inputs_.push_back(e);
 }
 
 void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg) {
-  auto it = grasps_.find(name);
-  if (it == grasps_.end()) return;
-  ActiveGrasp& g = it->second;
+  if (!grasps_.find(name)) return;
   const ros::Time now = ros::Time::now();
   std::string error = check_stamp_age((now - msg->header.stamp).toSec(), msg->header.stamp.isZero(),
                                       params_.max_pose_age);
@@ -353,34 +400,132 @@ void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStam
   if (error.empty()) error = check_vector(f, "force");
   if (error.empty()) error = check_vector(tau, "torque");
   Eigen::Isometry3d to_world;
-  if (error.empty() && !lookup_world(msg->header.frame_id, msg->header.stamp, &to_world, &error))
-    error = "unknown frame '" + msg->header.frame_id + "': " + error;
+  if (error.empty()) lookup_world(msg->header.frame_id, msg->header.stamp, &to_world, &error);
   if (!error.empty()) {
     ROS_WARN_THROTTLE(1.0, "corde_sim: wrench for grasp '%s' rejected: %s", name.c_str(),
                       error.c_str());
     return;
   }
+  InputEvent e;
+  e.kind = InputEvent::Kind::kWrench;
+  e.grasp = name;
   // Free vectors: only the rotation applies.
-  g.force = to_world.linear() * f;
-  g.torque = to_world.linear() * tau;
-  set_wrench_loads(&g);
+  e.force = to_world.linear() * f;
+  e.torque = to_world.linear() * tau;
+  inputs_.push_back(e);
 }
 
 void SimNode::on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg) {
-  auto it = grasps_.find(name);
+  const corde::GraspState* g = grasps_.find(name);
   std::string error;
-  if (it == grasps_.end() || !it->second.held)
+  if (!g || !g->held)
     error = "the grasp is released";
   else if (!std::isfinite(msg->data) || std::abs(msg->data) > 1e4)
     error = "rate must be finite and at most 1e4 rad/s";
-  else if (!it->second.grasp.hold_orientation)
+  else if (!g->grasp.hold_orientation)
     error = "the grasp does not hold the segment's orientation";
   if (!error.empty()) {
     ROS_WARN_THROTTLE(1.0, "corde_sim: twist_rate for grasp '%s' rejected: %s", name.c_str(),
                       error.c_str());
     return;
   }
-  it->second.twist_rate = msg->data;
+  InputEvent e;
+  e.kind = InputEvent::Kind::kTwistRate;
+  e.grasp = name;
+  e.rate = msg->data;
+  inputs_.push_back(e);
+}
+
+void SimNode::apply_inputs() {
+  for (const InputEvent& e : inputs_) {
+    auto w = wiring_.find(e.grasp);
+    if (w == wiring_.end()) continue;  // the scene was replaced since
+    switch (e.kind) {
+      case InputEvent::Kind::kPose: {
+        double& last = w->second.last_input_time;
+        if (last >= 0.0 && e.input_time < last) {
+          ROS_WARN_THROTTLE(1.0,
+                            "corde_sim: pose for grasp '%s' rejected: stamp older than the "
+                            "previous pose",
+                            e.grasp.c_str());
+          break;
+        }
+        const double interval =
+            last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
+        last = e.input_time;
+        grasps_.set_goal(e.grasp, world_.time(), e.pose, interval);
+        break;
+      }
+      case InputEvent::Kind::kWrench:
+        grasps_.set_wrench(world_, e.grasp, e.force, e.torque);
+        break;
+      case InputEvent::Kind::kTwistRate:
+        grasps_.set_twist_rate(e.grasp, e.rate);
+        break;
+    }
+  }
+  inputs_.clear();
+}
+
+void SimNode::check_holders_and_strain() {
+  for (const auto& kv : grasps_.grasps()) {
+    const corde::GraspState& g = kv.second;
+    if (!g.clip.any()) continue;
+    ROS_WARN_THROTTLE(2.0,
+                      "corde_sim: grasp '%s': holder motion limited to %s (it lags its commanded "
+                      "pose; ~holder_max_speed %g m/s, ~holder_max_acceleration %g m/s^2)",
+                      kv.first.c_str(), g.clip.speed ? "the speed limit" : "the acceleration limit",
+                      params_.holder_max_speed, params_.holder_max_acceleration);
+    grasps_.find(kv.first)->clip = corde::HolderClip();
+  }
+  // strain_warning_ stays until the next diagnostics report (diagnose() clears it), so that a short
+  // overstretch (which may end with a slip) is still reported.
+  for (size_t r = 0; r < world_.rods().size(); ++r) {
+    const corde::Rod& rod = world_.rods()[r];
+    const double limit = rod.section().max_strain;
+    if (!(limit > 0.0)) continue;
+    int seg = 0;
+    const double strain = rod.max_stretch_strain(&seg);
+    if (strain <= limit) continue;
+    strain_warning_ = "rod '" + rod.name() + "' stretched by " + num(100.0 * strain) +
+                      "% at segment " + std::to_string(seg) + ", above its material's max_strain " +
+                      num(100.0 * limit) + "% (length " + num(rod.length()) + " m)";
+    ROS_WARN_THROTTLE(2.0, "corde_sim: %s", strain_warning_.c_str());
+    if (params_.strain_action != StrainAction::kSlip) continue;
+    // The holder nearest to the overstretched segment lets go, as a real grip slips first there.
+    std::string nearest;
+    int best = 1 << 30;
+    for (const auto& kv : grasps_.grasps())
+      if (kv.second.held && kv.second.rod == static_cast<int>(r) &&
+          std::abs(kv.second.grasp.segment - seg) < best) {
+        best = std::abs(kv.second.grasp.segment - seg);
+        nearest = kv.first;
+      }
+    if (!nearest.empty() && grasps_.release(world_, nearest)) {
+      ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
+               strain_warning_.c_str());
+      refresh_layout();
+    }
+  }
+}
+
+void SimNode::publish_reactions() {
+  for (auto& kv : wiring_) {
+    Eigen::Vector3d f, tau;
+    if (!grasps_.take_reaction(kv.first, &f, &tau)) continue;
+    if (!kv.second.reaction_pub || kv.second.reaction_pub.getNumSubscribers() == 0) continue;
+    if (!f.allFinite() || !tau.allFinite()) continue;  // never leaves the node
+    geometry_msgs::WrenchStamped m;
+    m.header.stamp = stamp();
+    m.header.frame_id = params_.frame_prefix + "grasp/" + kv.first;
+    m.wrench.force.x = f.x();
+    m.wrench.force.y = f.y();
+    m.wrench.force.z = f.z();
+    m.wrench.torque.x = tau.x();
+    m.wrench.torque.y = tau.y();
+    m.wrench.torque.z = tau.z();
+    kv.second.reaction_pub.publish(m);
+  }
 }
 
 }  // namespace corde_sim

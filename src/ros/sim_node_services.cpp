@@ -10,7 +10,16 @@
 namespace corde_sim {
 
 bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
-  const std::string path = req.scene.empty() ? scene_path_ : req.scene;
+  std::string path = scene_path_;
+  if (!req.scene.empty()) {
+    std::string error;
+    path = resolve_scene(req.scene, &error);
+    if (path.empty()) {
+      res.success = false;
+      res.message = "scene not loaded, state unchanged: " + error;
+      return true;
+    }
+  }
   corde::Scene scene;
   try {
     // The ~overrides apply to the scene file given at start-up only.
@@ -35,7 +44,6 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   res.success = true;
   res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  publish_due(wall_seconds(), true);
   return true;
 }
 
@@ -56,11 +64,11 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   std::string summary;
   try {
     // A resampled rod loses its segment indices: take the grasps' drives off first, re-grasp
-    // after (remake_grasps_on).
-    for (auto& kv : grasps_)
+    // after (GraspSet::remake_on).
+    for (const auto& kv : grasps_.grasps())
       if (kv.second.held && std::find(plan.resample.begin(), plan.resample.end(),
                                       kv.second.grasp.rod) != plan.resample.end())
-        corde::release(world.rods()[kv.second.rod_index], kv.second.grasp);
+        corde::release(world.rods()[kv.second.rod], kv.second.grasp);
     summary = apply_configure(plan, &world, &settings);
   } catch (const std::exception& e) {
     res.success = false;
@@ -85,8 +93,10 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   }
   std::swap(world_, world);
   settings_ = settings;
-  for (const std::string& rod : plan.resample) remake_grasps_on(rod);
-  last_good_ = world_;
+  for (const std::string& rod : plan.resample)
+    for (size_t i = 0; i < world_.rods().size(); ++i)
+      if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
+  take_snapshot();
   bump_time();
   refresh_layout();
   res.success = true;
@@ -94,7 +104,6 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
                 summary + "(h/h_crit " + num(stability_margin_) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  publish_due(wall_seconds(), true);
   return true;
 }
 
@@ -121,14 +130,14 @@ bool SimNode::on_step(Step::Request& req, Step::Response& res) {
     return true;
   }
   update_tf_holders();
+  apply_inputs();
   run_steps(req.steps, std::numeric_limits<double>::infinity());
-  const int before = recoveries_;
-  check_finite();
+  res.success = check_state();
+  if (res.success) check_holders_and_strain();
   res.time = sim_time();
-  res.success = recoveries_ == before;
   res.message = res.success ? "stepped " + std::to_string(req.steps) + " step(s)"
-                            : "the state became non-finite; restored the last good state";
-  publish_due(wall_seconds(), true);
+                            : "the state became invalid (" + last_problem_ +
+                                  "); restored the last good state";
   return true;
 }
 
@@ -161,15 +170,24 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
       res.message = "point is not finite";
       return true;
     }
-    // Nearest segment midpoint; grasped by node index (segment k is node k's segment).
+    // Nearest point of the centreline; grasped by node index (segment k is node k's segment).
     int best = 0;
     double best_d = std::numeric_limits<double>::infinity();
     for (int s = 0; s < rod->num_segments(); ++s) {
-      const double d = (0.5 * (rod->positions()[s] + rod->positions()[s + 1]) - p).squaredNorm();
+      const Eigen::Vector3d a = rod->positions()[s], ab = rod->positions()[s + 1] - a;
+      const double u = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+      const double d = (a + u * ab - p).norm();
       if (d < best_d) {
         best_d = d;
         best = s;
       }
+    }
+    if (best_d > params_.max_grasp_distance) {
+      res.success = false;
+      res.message = "point is " + num(best_d) + " m from rod '" + req.rod +
+                    "' (nearest point of its centreline), farther than ~max_grasp_distance " +
+                    num(params_.max_grasp_distance) + " m";
+      return true;
     }
     spec.place = corde::GraspSpec::Place::kNode;
     spec.value = best;
@@ -199,28 +217,49 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
   ROS_INFO("corde_sim: %s", res.message.c_str());
   bump_time();
   refresh_layout();
-  publish_due(wall_seconds(), true);
   return true;
 }
 
 bool SimNode::on_release(Release::Request& req, Release::Response& res) {
-  auto it = grasps_.find(req.name);
-  if (it == grasps_.end() || !it->second.held) {
+  const corde::GraspState* g = grasps_.find(req.name);
+  if (!g || !g->held) {
     res.success = false;
-    res.message = it == grasps_.end() ? "no grasp named '" + req.name + "'"
-                                      : "grasp '" + req.name + "' is already released";
+    res.message =
+        !g ? "no grasp named '" + req.name + "'" : "grasp '" + req.name + "' is already released";
     return true;
   }
-  ActiveGrasp& g = it->second;
-  corde::release(world_.rods()[g.rod_index], g.grasp);
-  g.held = false;
-  g.twist_rate = 0.0;
+  grasps_.release(world_, req.name);
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
   ROS_INFO("corde_sim: %s", res.message.c_str());
   bump_time();
   refresh_layout();
-  publish_due(wall_seconds(), true);
+  return true;
+}
+
+bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
+  for (const auto& kv : grasps_.grasps()) {
+    const corde::GraspState& g = kv.second;
+    auto w = wiring_.find(kv.first);
+    res.names.push_back(kv.first);
+    res.rods.push_back(g.grasp.rod);
+    res.segments.push_back(g.grasp.segment);
+    res.arc_lengths.push_back(g.arc_length);
+    res.sources.push_back(w == wiring_.end() ? "" : to_string(w->second.source));
+    res.frames.push_back(w == wiring_.end() ? "" : w->second.frame);
+    res.held.push_back(g.held);
+    const Eigen::Isometry3d h = g.holder_pose();
+    const Eigen::Quaterniond q(h.linear());
+    geometry_msgs::Pose p;
+    p.position.x = h.translation().x();
+    p.position.y = h.translation().y();
+    p.position.z = h.translation().z();
+    p.orientation.x = q.x();
+    p.orientation.y = q.y();
+    p.orientation.z = q.z();
+    p.orientation.w = q.w();
+    res.holders.push_back(p);
+  }
   return true;
 }
 

@@ -241,3 +241,40 @@ def wait_connected(pub, timeout=10.0):
     while pub.get_num_connections() == 0 and time.monotonic() < end:
         time.sleep(0.02)
     return pub.get_num_connections() > 0
+
+
+def valid_state(s, max_speed=100.0):
+    """Finite, unit quaternions, no node faster than max_speed: what the node promises to publish."""
+    if not finite_state(s):
+        return False
+    for r in s.rods:
+        for q in r.orientations:
+            if abs(math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w) - 1.0) > 1e-6:
+                return False
+        for v in r.velocities:
+            if np.linalg.norm(vec(v)) > max_speed:
+                return False
+    return True
+
+
+def valid_tf(m):
+    """Finite transforms with unit quaternions (tf2 rejects zero ones as denormalized)."""
+    if not finite_tf(m):
+        return False
+    for t in m.transforms:
+        q = t.transform.rotation
+        if abs(math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w) - 1.0) > 1e-6:
+            return False
+    return True
+
+
+class RosoutRecorder(Recorder):
+    """Log lines of one node (from /rosout), for checking the text of its warnings."""
+
+    def __init__(self, node="/sim"):
+        from rosgraph_msgs.msg import Log
+        super().__init__("/rosout", Log, queue_size=1000)
+        self.node = node
+
+    def lines(self, since=None, contains=""):
+        return [m.msg for m in self.messages(since) if m.name == self.node and contains in m.msg]

@@ -1,8 +1,9 @@
 // Pure helpers of the ROS adapter (pacing, holder motion, input checks); no ROS needed.
 #include <gtest/gtest.h>
 
-#include "corde_sim/ros/holder_trajectory.h"
+#include "corde_sim/holder.h"
 #include "corde_sim/ros/input_checks.h"
+#include "corde_sim/ros/output_schedule.h"
 #include "corde_sim/ros/pacer.h"
 
 namespace corde_sim {
@@ -28,26 +29,51 @@ TEST(Pacer, UnpacedNeverSchedules) {
   EXPECT_EQ(p.steps_due(0.0, 1e6, 1e-4), 0);
 }
 
-TEST(HolderTrajectory, MovesContinuouslyToEachGoal) {
-  HolderTrajectory h;
+TEST(HolderMotion, ReferenceMovesContinuouslyToEachGoal) {
+  corde::HolderMotion h;
   Eigen::Isometry3d a = Eigen::Isometry3d::Identity();
   h.reset(a);
   Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
   b.translation() = Eigen::Vector3d(1.0, 0.0, 0.0);
   b.linear() = Eigen::AngleAxisd(1.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   h.set_goal(2.0, b, 0.1);
-  EXPECT_LT((h.at(2.0).translation() - a.translation()).norm(), 1e-12);
-  EXPECT_NEAR(h.at(2.05).translation().x(), 0.5, 1e-12);
-  EXPECT_NEAR(Eigen::AngleAxisd(h.at(2.05).linear()).angle(), 0.5, 1e-12);
-  EXPECT_LT((h.at(2.2).translation() - b.translation()).norm(), 1e-12);
+  EXPECT_LT((h.reference(2.0).translation() - a.translation()).norm(), 1e-12);
+  EXPECT_NEAR(h.reference(2.05).translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(h.reference(2.05).linear()).angle(), 0.5, 1e-12);
+  EXPECT_LT((h.reference(2.2).translation() - b.translation()).norm(), 1e-12);
   // A new goal half-way starts from where the holder is, not from the old goal.
   Eigen::Isometry3d c = Eigen::Isometry3d::Identity();
   h.set_goal(2.05, c, 0.1);
-  EXPECT_NEAR(h.at(2.05).translation().x(), 0.5, 1e-12);
-  EXPECT_NEAR(h.at(2.10).translation().x(), 0.25, 1e-12);
+  EXPECT_NEAR(h.reference(2.05).translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(h.reference(2.10).translation().x(), 0.25, 1e-12);
   // Zero duration: at once.
   h.set_goal(3.0, b, 0.0);
-  EXPECT_NEAR(h.at(3.0).translation().x(), 1.0, 1e-12);
+  EXPECT_NEAR(h.reference(3.0).translation().x(), 1.0, 1e-12);
+}
+
+TEST(OutputSchedule, KeepsEachRateWhateverTheLoopDoes) {
+  // Outputs at 50 and 20 Hz polled at irregular instants over 10 s: each is taken at its rate,
+  // and after a stall it resumes one period later without a burst.
+  OutputSchedule s;
+  s.set_rate(OutputSchedule::kTf, 50.0);
+  s.set_rate(OutputSchedule::kMarkers, 20.0);
+  s.set_rate(OutputSchedule::kState, 0.0);
+  s.start(0.0);
+  int tf = 0, markers = 0, state = 0;
+  double t = 0.0;
+  for (int k = 0; t < 10.0; ++k) {
+    t += (k % 7) * 1e-3 + 1e-4;
+    tf += s.take(OutputSchedule::kTf, t);
+    markers += s.take(OutputSchedule::kMarkers, t);
+    state += s.take(OutputSchedule::kState, t);
+    EXPECT_LE(s.next_due(), t + 0.05 + 1e-12);
+  }
+  EXPECT_NEAR(tf, 500, 2);
+  EXPECT_NEAR(markers, 200, 2);
+  EXPECT_EQ(state, 0);
+  EXPECT_TRUE(s.take(OutputSchedule::kTf, t + 3.0));  // after a 3 s stall: once, then on period
+  EXPECT_FALSE(s.take(OutputSchedule::kTf, t + 3.001));
+  EXPECT_TRUE(s.take(OutputSchedule::kTf, t + 3.021));
 }
 
 TEST(InputChecks, Poses) {

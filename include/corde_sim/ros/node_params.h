@@ -3,6 +3,7 @@
 
 #include <ros/node_handle.h>
 
+#include <Eigen/Geometry>
 #include <map>
 #include <string>
 #include <vector>
@@ -15,9 +16,20 @@ enum class MarkerStyle { kLineStrip, kCylinders };
 // at all (it holds the pose it had when it was made).
 enum class GraspSource { kTopic, kTf, kFixed };
 
+// What happens when the rod strains beyond its material's max_strain.
+enum class StrainAction { kWarn, kSlip };
+
 struct GraspSourceParam {
   GraspSource source = GraspSource::kTopic;
   std::string frame;  // tf frame followed when source is kTf
+  // The held segment's pose in the holder frame. Not given: topic and fixed grasps hold the
+  // segment frame itself (offset identity), tf grasps keep the offset the segment has when the
+  // frame first appears.
+  bool has_offset = false;
+  Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
+  // tf grasps: true = glide to the offset (given, or identity) when the frame appears, instead of
+  // keeping the one the segment has then.
+  bool snap = false;
 };
 
 struct NodeParams {
@@ -37,11 +49,22 @@ struct NodeParams {
   bool color_by_strain = true;
   double marker_min_diameter = 0.004;  // m: thin rods are drawn at least this thick
   double max_pose_age = 1.0;           // s
-  double loop_rate = 200.0;            // Hz: wake-ups of the paced loop
+  double max_frame_age = 1.0;          // s: a tf frame not updated for longer is not used
+  double max_grasp_distance = 0.05;    // m: ~grasp by point refuses points farther from the rod
+  // Grasp holders: limits of the motion towards their commanded poses.
+  double holder_max_speed = 2.0, holder_max_acceleration = 50.0;                     // m/s, m/s^2
+  double holder_max_angular_speed = 20.0, holder_max_angular_acceleration = 1000.0;  // rad/s(^2)
+  // Poses outside this box (world frame, m) are refused.
+  Eigen::Vector3d workspace_min = Eigen::Vector3d::Constant(-10.0);
+  Eigen::Vector3d workspace_max = Eigen::Vector3d::Constant(10.0);
+  StrainAction strain_action = StrainAction::kWarn;
+  // A state with a node faster or a segment spinning faster than this has blown up.
+  double max_node_speed = 100.0, max_angular_speed = 1e5;  // m/s, rad/s
+  double loop_rate = 200.0;                                // Hz: wake-ups of the paced loop
   bool start_paused = false;
   double status_period = 10.0;  // s of wall time between status lines in the log; 0 = none
   double benchmark = 0.0;       // s of wall time; > 0 runs, prints timings and exits
-  std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame}
+  std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame,offset,snap}
 };
 
 // Parses "topic" | "tf" | "fixed"; throws std::invalid_argument otherwise.

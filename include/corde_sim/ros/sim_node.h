@@ -24,38 +24,44 @@
 
 #include "corde_sim/Configure.h"
 #include "corde_sim/Grasp.h"
+#include "corde_sim/ListGrasps.h"
 #include "corde_sim/Release.h"
 #include "corde_sim/Reset.h"
 #include "corde_sim/Step.h"
 #include "corde_sim/WorldState.h"
 #include "corde_sim/grasp.h"
+#include "corde_sim/grasp_set.h"
 #include "corde_sim/ros/configure.h"
-#include "corde_sim/ros/holder_trajectory.h"
+#include "corde_sim/ros/input_events.h"
 #include "corde_sim/ros/node_params.h"
+#include "corde_sim/ros/output_schedule.h"
 #include "corde_sim/ros/outputs.h"
 #include "corde_sim/ros/pacer.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/validity.h"
 
 namespace corde_sim {
 
-// A grasp and its inputs. Released grasps stay (their wrench still acts on the rod) until a reset.
-struct ActiveGrasp {
-  corde::GraspSpec spec;
-  corde::Grasp grasp;
+// The ROS side of a grasp: where its holder pose comes from and its topics. The grasp itself
+// (segment, holder motion, wrench, reaction) lives in the library's GraspSet.
+struct GraspWiring {
   GraspSource source = GraspSource::kTopic;
-  std::string frame;  // followed tf frame (kTf)
-  bool held = true;
-  bool attached = true;  // kTf: false until the frame was first seen (the segment stays put)
-  int rod_index = 0;     // into world.rods()
+  std::string frame;        // followed tf frame (kTf)
+  bool attached = true;     // kTf: false until the frame was first seen (the segment stays put)
+  bool has_offset = false;  // the offset and snap of ~grasps/<name> (GraspSourceParam)
+  Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();
+  bool snap = false;
   int marker_id = 0;
-  HolderTrajectory holder;
   double last_input_time = -1.0;  // ROS time of the last pose input (s), for its interval
-  double twist_rate = 0.0;        // rad/s about the held segment's tangent
-  double twist_angle = 0.0;       // rad accumulated
-  corde::Vec3 force = corde::Vec3::Zero(), torque = corde::Vec3::Zero();  // world frame
-  int load_index = -1;      // first of its three loads in the rod (2 forces, 1 torque)
-  double arc_length = 0.0;  // material coordinate of the grasped segment's midpoint (m)
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
+  ros::Publisher reaction_pub;
+};
+
+// What the node falls back on when the state turns invalid: the world and the grasps' holders as
+// they were at a state that passed the validity check.
+struct Snapshot {
+  corde::World world;
+  corde::GraspSet grasps;
 };
 
 class SimNode {
@@ -78,12 +84,11 @@ class SimNode {
   std::string install_scene(corde::Scene scene, const std::string& path);
   std::string add_grasp(const corde::GraspSpec& spec, GraspSource source, const std::string& frame,
                         bool from_scene, int* segment);
-  void remake_grasps_on(const std::string& rod);
-  void hold_all(double t_end, double h);
-  Eigen::Isometry3d holder_pose(const ActiveGrasp& g, double t) const;
+  void wire_grasp(const std::string& name, GraspWiring* w);
   void update_tf_holders();
-  void set_wrench_loads(ActiveGrasp* g);
   void refresh_layout();
+  void apply_inputs();
+  void check_holders_and_strain();
 
   // Inputs.
   void on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static);
@@ -92,6 +97,9 @@ class SimNode {
   void on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg);
   bool lookup_world(const std::string& frame, const ros::Time& stamp, Eigen::Isometry3d* out,
                     std::string* error) const;
+  bool own_frame(const std::string& frame, Eigen::Isometry3d* out) const;
+  std::string check_workspace(const Eigen::Vector3d& p) const;
+  std::string resolve_scene(const std::string& path, std::string* error) const;
   double ros_to_sim_interval(double ros_seconds) const;
 
   // Services.
@@ -101,12 +109,16 @@ class SimNode {
   bool on_step(Step::Request& req, Step::Response& res);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
   bool on_release(Release::Request& req, Release::Response& res);
+  bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
 
   // Loop and outputs.
   void advance(double now);
-  void check_finite();
-  double next_output_due() const;
-  void publish_due(double now, bool force);
+  // Validity check after steps: restores the last good snapshot when the state is not valid.
+  // Returns false if it restored.
+  bool check_state();
+  void take_snapshot();
+  void publish_due(double now);
+  void publish_reactions();
   void publish_tf();
   void send_tf_to(const ros::SingleSubscriberPublisher& pub);
   void publish_markers();
@@ -127,9 +139,12 @@ class SimNode {
   std::string scene_path_;
   corde::Scene initial_;  // the scene as loaded, for ~reset
   corde::World world_;
-  corde::World last_good_;  // copied at every publish: restored if the state turns non-finite
+  corde::GraspSet grasps_;
+  std::map<std::string, GraspWiring> wiring_;
+  InputQueue inputs_;
+  Snapshot last_good_;  // taken at publishes of a valid state; restored if it turns invalid
+  corde::ValidityLimits validity_;
   SimSettings settings_;
-  std::map<std::string, ActiveGrasp> grasps_;
   int next_marker_id_ = 0;
 
   double time_offset_ = 0.0;  // node simulation time = time_offset_ + world_.time()
@@ -149,10 +164,14 @@ class SimNode {
   double step_time_us_ = 0.0, measured_rtf_ = 0.0;
   bool lagging_ = false, rtf_initialised_ = false;
   int recoveries_ = 0, recoveries_reported_ = 0;
+  std::vector<double> recovery_walls_;  // wall times of recent recoveries
+  std::string last_problem_;            // why the state was last found invalid
+  std::string strain_warning_;          // rod strained beyond its max_strain (for diagnostics)
   double last_clock_ = -1.0, last_tf_time_ = -1.0;
 
   // Output deadlines (steady-clock seconds).
-  double next_tf_ = 0.0, next_marker_ = 0.0, next_stats_ = 0.0, next_status_ = 0.0;
+  OutputSchedule schedule_;
+  double next_status_ = 0.0;
 
   ros::Publisher tf_pub_, marker_pub_, state_pub_, clock_pub_;
   ros::Subscriber tf_sub_, tf_static_sub_;
