@@ -18,7 +18,10 @@ struct HolderLimits {
   double max_angular_acceleration = 1e3;  // rad/s^2
 };
 
-// Which limits clipped the motion in one advance().
+// Which limits clipped the motion in one advance() and left the holder behind its reference by
+// more than these.
+constexpr double kReportedLag = 1e-3;         // m
+constexpr double kReportedAngularLag = 1e-2;  // rad
 struct HolderClip {
   bool speed = false, acceleration = false;
   bool any() const { return speed || acceleration; }

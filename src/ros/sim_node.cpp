@@ -107,6 +107,10 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
   services_.push_back(pnh_.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
 
+  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once).
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(pnh_);
+  reconfigure_->setCallback([this](NodeConfig& c, uint32_t level) { on_reconfigure(c, level); });
+
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
   diagnostics_->setHardwareID("corde_sim");
   diagnostics_->add("simulation", this, &SimNode::diagnose);

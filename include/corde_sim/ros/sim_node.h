@@ -8,6 +8,7 @@
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
@@ -25,6 +26,7 @@
 #include "corde_sim/Configure.h"
 #include "corde_sim/Grasp.h"
 #include "corde_sim/ListGrasps.h"
+#include "corde_sim/NodeConfig.h"
 #include "corde_sim/Release.h"
 #include "corde_sim/Reset.h"
 #include "corde_sim/Step.h"
@@ -110,6 +112,7 @@ class SimNode {
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
   bool on_release(Release::Request& req, Release::Response& res);
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
+  void on_reconfigure(NodeConfig& config, uint32_t level);
 
   // Loop and outputs.
   void advance(double now);
@@ -178,6 +181,7 @@ class SimNode {
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  std::unique_ptr<dynamic_reconfigure::Server<NodeConfig>> reconfigure_;
   TfFrames tf_frames_;
   RodPaths rod_paths_;
 };
