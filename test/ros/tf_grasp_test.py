@@ -98,6 +98,29 @@ class TfGrasp(unittest.TestCase):
         time.sleep(1.5)
         self.assert_pose(self.seg(5, time.monotonic()), p0 + delta, r0, "segment of 'mid'")
 
+    def test_3_snap_to_offset(self):
+        # ~grasps/snapper: offset [0, 0, 0.05] (the segment 5 cm along the frame's z), snap: the
+        # segment glides there within the holder limits instead of keeping its current offset.
+        ct.wait_for_node(self.sim, self)
+        s = self.sim.fresh_state()
+        p3, r3 = ct.segment_pose(s.rods[0], 3)
+        hand_p, hand_r = p3 + np.array([0.02, -0.03, 0.04]), r3  # frame z along the segment
+        self.br.set("snap_hand", hand_p, hand_r)
+        time.sleep(0.5)
+        r = self.sim.grasp("snapper", arc_length=0.175, source="tf", frame="snap_hand")
+        self.assertTrue(r.success, r.message)
+        self.assertEqual(r.segment, 3)
+        since = time.monotonic()
+        time.sleep(1.5)
+        # No jump: the segment's nodes never moved faster than the holder limit (2 m/s; a jump
+        # would show as the whole offset over one step).
+        for st in self.sim.state.messages(since):
+            for k in (3, 4):
+                self.assertLess(np.linalg.norm(ct.vec(st.rods[0].velocities[k])), 2.0 * 1.05)
+        self.assert_pose(self.seg(3, time.monotonic()), hand_p + hand_r @ np.array([0, 0, 0.05]),
+                         hand_r, "snapped segment")
+        self.assertTrue(self.sim.release("snapper").success)
+
 
 if __name__ == "__main__":
     rostest.rosrun("corde_sim", "tf_grasp", TfGrasp)
