@@ -27,8 +27,9 @@ struct GraspState {
   double twist_rate = 0.0;                           // rad/s about the held segment's tangent
   double twist_angle = 0.0;                          // rad accumulated, in (-pi, pi]
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // applied wrench, world frame, at the midpoint
-  double arc_length = 0.0;  // rest arc length of the grasped segment's midpoint (m)
-  HolderClip clip;          // limits hit since the caller last cleared it
+  double arc_length = 0.0;   // rest arc length of the grasped segment's midpoint (m)
+  HolderClip clip;           // limits hit since the caller last cleared it
+  bool hold_pending = true;  // the drives must be set again at the next step
   // Reaction: force on the holder and torque about its origin, world frame, summed over steps.
   Vec3 reaction_force_sum = Vec3::Zero(), reaction_torque_sum = Vec3::Zero();
   long reaction_steps = 0;

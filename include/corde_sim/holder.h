@@ -45,15 +45,26 @@ class HolderMotion {
   const Eigen::Vector3d& angular_velocity() const { return w_; }  // world frame
   // Reference pose at time t (the interpolation between the inputs, before the limits).
   Eigen::Isometry3d reference(double t) const;
-  // True while the holder has not reached its goal (within 1e-9 m and rad) or still moves.
-  bool moving() const;
+  // False once the holder rests at its goal (then advance() costs nothing and changes nothing).
+  bool moving() const { return !settled_; }
 
  private:
+  // The reference as a position and a unit quaternion.
+  void reference(double t, Eigen::Vector3d* p, Eigen::Quaterniond* q) const;
+
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
+  Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();  // pose_'s rotation
   Eigen::Vector3d v_ = Eigen::Vector3d::Zero(), w_ = Eigen::Vector3d::Zero();
-  Eigen::Isometry3d start_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d goal_ = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d p_start_ = Eigen::Vector3d::Zero(), p_goal_ = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q_start_ = Eigen::Quaterniond::Identity();
+  Eigen::Quaterniond q_goal_ = Eigen::Quaterniond::Identity();
   double t0_ = 0.0, duration_ = 0.0;
+  bool settled_ = true;
+  // The reference at the end of the last step, which is the start of the next (t advances by h).
+  double cached_t_ = -1e300;
+  Eigen::Vector3d cached_p_ = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond cached_q_ = Eigen::Quaterniond::Identity();
 };
 
 }  // namespace corde

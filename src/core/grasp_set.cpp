@@ -105,6 +105,7 @@ void GraspSet::attach(World& world, const std::string& name, const Eigen::Isomet
   g->twist_angle = 0.0;
   g->held = true;
   hold(rod, g->grasp, g->holder_pose());
+  g->hold_pending = true;
 }
 
 bool GraspSet::release(World& world, const std::string& name) {
@@ -178,12 +179,15 @@ void GraspSet::before_step(World& world, double t, double h) {
     }
     g.w0 = rod.angular_velocities()[s];
     g.q0 = rod.orientations()[s];
+    // A holder at rest with nothing turning leaves the drives as they are (their targets hold).
+    if (!g.holder.moving() && g.twist_rate == 0.0 && !g.hold_pending) continue;
     const HolderClip c = g.holder.advance(t, h, limits);
     g.clip.speed |= c.speed;
     g.clip.acceleration |= c.acceleration;
     if (g.twist_rate != 0.0)
       g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
     hold(rod, g.grasp, g.holder_pose());
+    g.hold_pending = false;
   }
 }
 
@@ -243,6 +247,7 @@ void GraspSet::remake_on(World& world, int rod_index) {
       g.holder.reset(holder);
       g.twist_angle = 0.0;
       hold(rod, g.grasp, holder);
+      g.hold_pending = true;
     }
   }
   apply_wrenches(world, rod_index);
