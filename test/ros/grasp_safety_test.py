@@ -125,12 +125,17 @@ class GraspSafety(unittest.TestCase):
     def test_6_service_burst_keeps_output_rates(self):
         # 2 s of ~reset and ~configure calls as fast as they go (hundreds per second): rod_state
         # (50 Hz) and tf (50 Hz) keep their rates.
-        reset = self.sim.service("reset", __import__("corde_sim.srv", fromlist=["Reset"]).Reset)
+        from corde_sim.srv import Configure, Reset
+        reset = self.sim.service("reset", Reset)
+        configure = self.sim.service("configure", Configure)
         time.sleep(0.5)
         since = time.monotonic()
         calls = 0
         while time.monotonic() < since + 2.0:
-            reset("")
+            if calls % 2:
+                self.assertTrue(configure("", ["damping_time"], [1e-5 * (1 + calls % 3)], [], []).success)
+            else:
+                reset("")
             calls += 1
         self.assertGreater(calls, 100)
         states = self.sim.state.messages(since)
