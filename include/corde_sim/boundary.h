@@ -55,4 +55,19 @@ struct GhostFrame {
   Vec3 uhat = Vec3::Zero();  // rest strain of the boundary element
 };
 
+// Drag of the surrounding air (or fluid) at rest, per unit length of rod, split into the
+// components of the velocity normal and tangential to the rod: f = -(c_n v_n + c_t v_t) -
+// (q_n |v_n| v_n + q_t |v_t| v_t) (N/m). From a fluid of density rho_f and a normal drag
+// coefficient C_d on a cylinder of diameter 2r: q_n = rho_f C_d r (= 1/2 rho_f C_d 2r).
+struct Drag {
+  double linear_normal = 0.0;         // c_n (N s/m^2)
+  double linear_tangential = 0.0;     // c_t (N s/m^2)
+  double quadratic_normal = 0.0;      // q_n (N s^2/m^3)
+  double quadratic_tangential = 0.0;  // q_t (N s^2/m^3)
+  bool active() const {
+    return linear_normal > 0.0 || linear_tangential > 0.0 || quadratic_normal > 0.0 ||
+           quadratic_tangential > 0.0;
+  }
+};
+
 }  // namespace corde

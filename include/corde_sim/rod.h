@@ -78,6 +78,10 @@ class Rod {
   bool has_external() const { return has_external_; }
   const std::vector<Vec3>& external_forces() const { return ext_f_; }
   const std::vector<Vec3>& external_torques() const { return ext_tau_; }
+  // Air drag on the nodes (none by default; boundary.h). Throws std::invalid_argument for a
+  // negative or non-finite coefficient.
+  void set_drag(const Drag& drag);
+  const Drag& drag() const { return drag_; }
   // Ghost-frame clamps at the start (before segment 0) and end (after the last segment).
   GhostFrame& ghost_start() { return ghost_[0]; }
   GhostFrame& ghost_end() { return ghost_[1]; }
@@ -111,6 +115,7 @@ class Rod {
   void forces_block(int b0, int b1, double t, const Vec3& gravity);
   void integrate_block(int b0, int b1, double h);
   void apply_drives(double t_end, double h);
+  void drag_block(int node0, int node1);
 
   std::string name_;
   Section section_;
@@ -141,6 +146,7 @@ class Rod {
   std::vector<Load> loads_;
   std::vector<Vec3> ext_f_, ext_tau_;  // empty until the first external force or torque
   bool has_external_ = false;
+  Drag drag_;
   GhostFrame ghost_[2];
 };
 

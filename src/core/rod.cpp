@@ -156,6 +156,32 @@ void Rod::add_external_torque(int segment, const Vec3& torque) {
   ext_tau_[segment] += torque;
 }
 
+void Rod::set_drag(const Drag& d) {
+  for (double c :
+       {d.linear_normal, d.linear_tangential, d.quadratic_normal, d.quadratic_tangential})
+    if (!(c >= 0.0) || !std::isfinite(c))
+      throw std::invalid_argument("rod '" + name_ + "': drag coefficients must be >= 0");
+  drag_ = d;
+}
+
+void Rod::drag_block(int node0, int node1) {
+  // Per node: the rod's direction there (the chord across the node), the length it stands for
+  // (half of each adjacent segment's rest length: its mass over the mass per length), and the
+  // drag per unit length of its velocity relative to still air.
+  const int n = num_segments();
+  const double inv_mu = 1.0 / section_.mass_per_length;
+  for (int i = node0; i < node1; ++i) {
+    const Vec3 chord = x_[std::min(i + 1, n)] - x_[std::max(i - 1, 0)];
+    const double len = chord.norm();
+    const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
+    const Vec3& v = v_[i];
+    const Vec3 vt = v.dot(t) * t, vn = v - vt;
+    const Vec3 f = -(drag_.linear_normal + drag_.quadratic_normal * vn.norm()) * vn -
+                   (drag_.linear_tangential + drag_.quadratic_tangential * vt.norm()) * vt;
+    f_[i] += (mass_[i] * inv_mu) * f;
+  }
+}
+
 void Rod::clear_external() {
   ext_f_.clear();
   ext_tau_.clear();
@@ -459,6 +485,7 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
     else
       tau_[l.index] += q_[l.index].conjugate() * (scale * l.value);
   }
+  if (drag_.active()) drag_block(r.node0, r.node1);
   if (has_external_) {
     for (int i = r.node0; i < r.node1; ++i) f_[i] += ext_f_[i];
     for (int s = r.seg0; s < r.seg1; ++s) tau_[s] += q_[s].conjugate() * ext_tau_[s];
