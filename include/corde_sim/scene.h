@@ -16,6 +16,17 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Limits on what a scene may ask for (docs/scene_format.md, "Limits"), so that a typo or a
+// hostile file gives a clear error instead of a run that never ends or exhausts memory.
+struct SceneLimits {
+  static constexpr long max_file_bytes = 1 << 20;     // scene file size (1 MiB)
+  static constexpr int max_rods = 1000;               // rods in a scene
+  static constexpr int max_elements = 100000;         // elements of one rod
+  static constexpr long max_total_elements = 200000;  // elements of all rods together
+  static constexpr int max_items = 10000;             // loads or boundary entries of a rod
+  static constexpr int max_grasps = 1000;             // grasps in a scene
+};
+
 struct Scene {
   World world;            // rods built, drives/loads applied, gravity, time step
   double duration = 1.0;  // s

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "corde_sim/scene.h"
+#include "corde_sim/validity.h"
 
 namespace corde {
 
@@ -17,26 +18,46 @@ struct RunOptions {
   // Called about every `progress_interval` seconds of wall time with the fraction done.
   std::function<void(double fraction, double sim_time, double wall_seconds)> progress;
   double progress_interval = 0.25;
+  // Runaway detection. An explicit step that loses stability does not always reach NaN: it can
+  // run on with finite garbage (a 1 m pendulum 6 m from its pin, 1e10 J). The run stops at the
+  // first state that fails these checks, and the CSV ends with the last frame that passed them.
+  ValidityLimits limits;  // finite, unit quaternions, node speed, segment spin (validity.h)
+  // |axial strain| of any segment; 0: no check. The shipped scenes stay below 2.2 (thread).
+  double max_strain = 10.0;
+  // (kinetic + elastic energy) / mass of any rod, J/kg; 0: no check. 1e4 J/kg is the kinetic
+  // energy of a rod moving as a whole at 141 m/s; the shipped scenes stay below 11 J/kg.
+  double max_specific_energy = 1e4;
+  // Refuse runs of more steps (duration / time_step) than this: 1e15 s at 1e-300 s would
+  // overflow the step counter, and 1e9 steps already take about 20 minutes for a small rod.
+  double max_steps = 1e9;
 };
 
 struct RunResult {
   long steps = 0;             // steps taken
   double sim_time = 0.0;      // s, the world's clock at the end
   double wall_seconds = 0.0;  // time spent stepping (and writing CSV)
-  bool finite = true;         // false: the state blew up at failed_step
-  long failed_step = -1;      // first step whose result was non-finite
+  bool ok = true;             // false: the state failed the checks at failed_step
+  std::string problem;        // why, naming the rod and item ("" when ok)
+  long failed_step = -1;      // the step at which the checks (every 8 steps) failed
   double failed_time = 0.0;   // the world's time after that step
   WorldEnergies energies;     // at the end (or at failure)
   int every = 0;              // the CSV interval used
+  bool write_failed = false;  // the CSV stream failed (disk full...): the run stopped there
 };
 
 // The CSV header: t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw
 void write_csv_header(std::ostream& out);
-// One row per segment of every rod: time, rod name, segment, its two nodes, its orientation.
+// One row per segment of every rod: time, rod name, segment, its two nodes, its orientation. A
+// name with a comma, quote or line break is quoted as in RFC 4180.
 void write_csv_rows(std::ostream& out, const World& world);
 
+// "" if the world passes the runaway checks of `options`, else the first problem found.
+std::string run_problem(const World& world, const RunOptions& options);
+
 // Steps the scene's world for the duration, holding each grasp where it is at the start. Stops
-// at the first non-finite state.
+// at the first state that fails run_problem() (checked every 8 steps and before every CSV frame,
+// so the CSV ends with the last frame that passed) or when the CSV cannot be written. Throws
+// SceneError if the duration needs more than options.max_steps steps (or the step is not > 0).
 RunResult run_scene(Scene* scene, const RunOptions& options = {});
 
 // Multiline summary: scene, rods and elements, steps, simulated and wall time, time per step,

@@ -1,5 +1,6 @@
 #include "corde_sim/scene.h"
 
+#include <sys/stat.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 namespace corde {
 namespace {
 
+using scene_detail::echo;
 using scene_detail::Map;
 using scene_detail::num;
 using scene_detail::Value;
@@ -45,7 +47,7 @@ int read_index(const Value& v, int count, const char* what) {
     v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
   }
   if (d != std::floor(d) || d < 0.0 || d > count - 1)
-    v.fail(std::string(what) + " index " + v.node().Scalar() + " out of range (0.." +
+    v.fail(std::string(what) + " index " + echo(v.node().Scalar()) + " out of range (0.." +
            std::to_string(count - 1) + ", start or end)");
   return static_cast<int>(d);
 }
@@ -142,6 +144,14 @@ void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings)
   rod->add_load(l);
 }
 
+// The items of a list, failing when there are more than `limit` of them.
+std::vector<Value> limited_items(const Value& list, int limit, const char* what) {
+  if (list.is_sequence() && list.node().size() > static_cast<size_t>(limit))
+    list.fail("has " + std::to_string(list.node().size()) + " " + what +
+              ", more than the limit of " + std::to_string(limit));
+  return list.items();
+}
+
 struct RodEntry {
   std::string path;
   Owners owners;
@@ -156,13 +166,17 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
     if (spec.name.empty()) p->fail("must not be empty");
     for (size_t i = 0; i < entries->size(); ++i)
       if (scene->world.rods()[i].name() == spec.name)
-        p->fail("duplicate rod name '" + spec.name + "' (also " + (*entries)[i].path + ")");
+        p->fail("duplicate rod name " + echo(spec.name) + " (also " + (*entries)[i].path + ")");
   }
-  if (auto p = m.find("elements")) {
-    spec.elements = p->integer();
-    if (spec.elements < 1) p->fail("must be >= 1, got " + std::to_string(spec.elements));
-    if (spec.elements > 100000) p->fail("must be <= 100000, got " + std::to_string(spec.elements));
-  }
+  std::optional<Value> elements = m.find("elements");
+  if (elements) spec.elements = elements->integer(1, SceneLimits::max_elements);
+  long total = spec.elements;
+  for (const Rod& r : scene->world.rods()) total += r.num_segments();
+  if (total > SceneLimits::max_total_elements)
+    (elements ? *elements : v)
+        .fail("the scene's rods would have " + std::to_string(total) +
+              " elements together, more than the limit of " +
+              std::to_string(SceneLimits::max_total_elements));
   spec.section = scene_detail::read_section(&m);
   spec.shape = scene_detail::read_shape(m.get("shape"));
   if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
@@ -176,9 +190,11 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
   }
   RodEntry entry{v.path(), {}};
   if (auto b = m.find("boundary"))
-    for (const Value& item : b->items()) read_boundary(item, rod, &entry.owners);
+    for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))
+      read_boundary(item, rod, &entry.owners);
   if (auto l = m.find("loads"))
-    for (const Value& item : l->items()) read_load(item, rod, &scene->warnings);
+    for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
+      read_load(item, rod, &scene->warnings);
   m.finish();
   entries->push_back(std::move(entry));
 }
@@ -191,7 +207,7 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
   g.name = nv.string();
   if (g.name.empty()) nv.fail("must not be empty");
   if (names->count(g.name))
-    nv.fail("duplicate grasp name '" + g.name + "' (also " + names->at(g.name) + ")");
+    nv.fail("duplicate grasp name " + echo(g.name) + " (also " + names->at(g.name) + ")");
   (*names)[g.name] = v.path();
   const auto& rods = scene.world.rods();
   int r = 0;
@@ -201,7 +217,7 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
     if (r == static_cast<int>(rods.size())) {
       std::string known;
       for (const Rod& rod : rods) known += (known.empty() ? "" : ", ") + rod.name();
-      rv->fail("no rod named '" + g.rod + "' (rods: " + known + ")");
+      rv->fail("no rod named " + echo(g.rod) + " (rods: " + echo(known) + ")");
     }
   } else if (rods.size() == 1) {
     g.rod = rods[0].name();
@@ -248,13 +264,19 @@ void check_time_step(Scene* scene, const Value* given) {
   StabilityEstimate worst;
   for (const Rod& rod : scene->world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
-    if (e.time_step < limit) {
+    if (which.empty() || std::isnan(e.time_step) || e.time_step < limit) {
       limit = e.time_step;
       which = rod.name();
       worst = e;
     }
   }
   if (!given) {
+    // A degenerate rod (radius 1e-100) can give an infinite or zero limit: no step to run at.
+    if (!(limit > 0.0 && std::isfinite(limit)))
+      throw SceneError("time_step: auto: the estimated stability limit of rod '" + which + "' is " +
+                       num(limit) +
+                       " s, no step can be chosen; check the rod's "
+                       "radius and material, or give time_step");
     scene->world.time_step = 0.8 * limit;
     return;
   }
@@ -280,8 +302,13 @@ Scene build_scene(const YAML::Node& root, const std::string& source);
 Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& overrides,
                   const std::string& source) {
   YAML::Node root;
+  // yaml-cpp takes a lone CR for an ordinary character (the whole file would be one line); YAML
+  // reads it as a line break, and so do we.
+  std::string text = yaml_text;
+  for (size_t i = 0; i < text.size(); ++i)
+    if (text[i] == '\r' && (i + 1 == text.size() || text[i + 1] != '\n')) text[i] = '\n';
   try {
-    root = YAML::Load(yaml_text);
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
     throw SceneError(source + ":" + std::to_string(e.mark.line + 1) + ":" +
                      std::to_string(e.mark.column + 1) + ": YAML syntax error: " + e.msg);
@@ -294,7 +321,7 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
     // Values from overrides carry line numbers of their own one-line text: name the override.
     std::string msg = e.what();
     const std::string path = msg.substr(0, msg.find(": "));
-    for (size_t i = 0; i < set.size(); ++i) {
+    for (size_t i = set.size(); i-- > 0;) {  // the last override of a key is the one in effect
       const std::string& p = set[i];
       if (path.compare(0, p.size(), p) != 0 ||
           (path.size() > p.size() && path[p.size()] != '.' && path[p.size()] != '['))
@@ -331,13 +358,13 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
 
   std::vector<RodEntry> entries;
   const Value rods = top.get("rods");
-  const std::vector<Value> items = rods.items();
+  const std::vector<Value> items = limited_items(rods, SceneLimits::max_rods, "rods");
   if (items.empty()) rods.fail("needs at least one rod");
   for (size_t i = 0; i < items.size(); ++i)
     read_rod(items[i], static_cast<int>(i), &scene, &entries);
   if (auto g = top.find("grasps")) {
     std::map<std::string, std::string> names;
-    for (const Value& item : g->items())
+    for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps"))
       scene.grasps.push_back(read_grasp(item, scene, &entries, &names));
   }
   top.finish();
@@ -348,12 +375,21 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
 }  // namespace
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  std::ifstream in(path);
+  struct stat st;
+  if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw SceneError(path + ": is a directory, not a scene file");
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot open the file");
-  std::stringstream text;
-  text << in.rdbuf();
+  // Read at most one byte past the limit: /dev/zero or a huge file must not be read whole.
+  const size_t limit = SceneLimits::max_file_bytes;
+  std::string text(limit + 1, '\0');
+  in.read(&text[0], static_cast<std::streamsize>(text.size()));
   if (in.bad()) throw SceneError(path + ": cannot read the file");
-  return parse_scene(text.str(), overrides, path);
+  text.resize(static_cast<size_t>(in.gcount()));
+  if (text.size() > limit)
+    throw SceneError(path + ": larger than the limit of " + std::to_string(limit) +
+                     " bytes for a scene file");
+  return parse_scene(text, overrides, path);
 }
 
 }  // namespace corde

@@ -16,7 +16,10 @@ const MaterialPreset& find_preset(const Value& v) {
   try {
     return material_preset(name);
   } catch (const std::invalid_argument& e) {
-    v.fail(e.what());
+    std::string msg = e.what();  // names the preset: cut a huge one short
+    const size_t at = msg.find("'" + name + "'");
+    if (at != std::string::npos) msg.replace(at, name.size() + 2, echo(name));
+    v.fail(msg);
   }
 }
 

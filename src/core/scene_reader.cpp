@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <sstream>
 
 namespace corde {
@@ -13,6 +14,15 @@ std::string num(double v) {
   return buf;
 }
 
+std::string echo(const std::string& text) {
+  const bool cut = text.size() > 60;
+  std::string out = "'";
+  for (char c : cut ? text.substr(0, 40) : text) out += c == '\n' ? "\\n" : std::string(1, c);
+  out += "'";
+  if (cut) out += "... (" + std::to_string(text.size()) + " characters)";
+  return out;
+}
+
 void Value::fail(const std::string& reason) const {
   std::string msg = (path_.empty() ? std::string("scene") : path_) + ": " + reason;
   const YAML::Mark mark = node_.IsDefined() ? node_.Mark() : YAML::Mark::null_mark();
@@ -22,7 +32,7 @@ void Value::fail(const std::string& reason) const {
 
 std::string Value::describe() const {
   if (!node_.IsDefined() || node_.IsNull()) return "nothing";
-  if (node_.IsScalar()) return "'" + node_.Scalar() + "'";
+  if (node_.IsScalar()) return echo(node_.Scalar());
   if (node_.IsSequence()) return "a list of " + std::to_string(node_.size());
   return "a map";
 }
@@ -51,9 +61,11 @@ double Value::non_negative() const {
   return v;
 }
 
-int Value::integer() const {
+int Value::integer(int lo, int hi) const {
   const double v = number();
-  if (v != std::floor(v) || std::abs(v) > 2e9) fail("expected an integer, got " + describe());
+  if (v != std::floor(v)) fail("expected an integer, got " + describe());
+  if (v < lo) fail("must be >= " + std::to_string(lo) + ", got " + describe());
+  if (v > hi) fail("must be <= " + std::to_string(hi) + ", got " + describe());
   return static_cast<int>(v);
 }
 
@@ -80,7 +92,7 @@ Vec3 Value::vec3() const {
 Vec3 Value::nonzero_vec3() const {
   const Vec3 v = vec3();
   if (!(v.norm() > 1e-12)) fail("must not be the zero vector");
-  return v;
+  return v / v.cwiseAbs().maxCoeff();
 }
 
 std::string Value::choice(const std::vector<std::string>& choices) const {
@@ -103,6 +115,15 @@ std::vector<Value> Value::items() const {
 
 Map::Map(const Value& v) : node_(v.node()), path_(v.path()) {
   if (!v.is_map()) v.fail("expected a map of keys, got " + v.describe());
+  std::map<std::string, YAML::Mark> seen;
+  for (const auto& kv : node_) {
+    const std::string key = kv.first.Scalar();
+    const auto [it, first] = seen.emplace(key, kv.first.Mark());
+    if (first) continue;
+    auto line = [](const YAML::Mark& m) { return std::to_string(m.line + 1); };
+    throw SceneError(child_path(key) + ": duplicate key (lines " + line(it->second) + " and " +
+                     line(kv.first.Mark()) + "); give each key once");
+  }
 }
 
 std::string Map::child_path(const std::string& key) const {
@@ -166,6 +187,9 @@ std::vector<std::string> split_path(const std::string& path) {
   return parts;
 }
 
+// The path for a message; the top level has none.
+std::string where(const std::string& path) { return path.empty() ? "scene (top level)" : path; }
+
 bool parse_index(const std::string& s, size_t* out) {
   if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos)
     return false;
@@ -208,8 +232,9 @@ std::vector<std::string> apply_overrides(YAML::Node* root,
             }
         }
         if (!found)
-          throw SceneError(path + ": no item '" + key + "' (has " + std::to_string(node.size()) +
-                           " items, by index or name) in override '" + o + "'");
+          throw SceneError(where(path) + ": no item " + echo(key) + " (has " +
+                           std::to_string(node.size()) + " items, by index or name) in override '" +
+                           o + "'");
         child_path = path + "[" + std::to_string(index) + "]";
         if (last) {
           node[index] = value;
@@ -225,8 +250,8 @@ std::vector<std::string> apply_overrides(YAML::Node* root,
           node = YAML::Node(YAML::NodeType::Map);
           node["preset"] = preset;
         } else if (!node.IsMap() && node.IsDefined() && !node.IsNull()) {
-          throw SceneError(path + ": is not a map, cannot set '" + key + "' (override '" + o +
-                           "')");
+          throw SceneError(where(path) + ": is not a map, cannot set " + echo(key) +
+                           " (override '" + o + "')");
         }
         if (last) {
           node[key] = value;

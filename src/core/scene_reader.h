@@ -19,6 +19,9 @@ namespace scene_detail {
 
 // Formats a number for messages the way a user would type it (shortest round trip, %g-like).
 std::string num(double v);
+// Text from the file for a message, in quotes: line breaks shown as \n, and cut to its first 40
+// characters with its length when it is longer than 60, so that a huge value is not echoed whole.
+std::string echo(const std::string& text);
 
 // A node of the tree and its path ("rods[0].material.E").
 class Value {
@@ -38,10 +41,12 @@ class Value {
   double number() const;  // finite
   double positive() const;
   double non_negative() const;
-  int integer() const;
+  int integer(int lo, int hi) const;  // fails naming the range when outside [lo, hi]
   bool boolean() const;
   std::string string() const;
   Vec3 vec3() const;
+  // A direction: scaled so that its largest component is +-1 (the norm of [1e200, 0, 0] would
+  // overflow).
   Vec3 nonzero_vec3() const;
   // One of `choices`; fails listing them.
   std::string choice(const std::vector<std::string>& choices) const;
@@ -52,7 +57,8 @@ class Value {
   std::string path_;
 };
 
-// A mapping whose keys are accounted for: finish() fails on any key never asked for.
+// A mapping whose keys are accounted for: finish() fails on any key never asked for. A key given
+// twice is an error naming both lines (YAML would silently keep the first).
 class Map {
  public:
   explicit Map(const Value& v);

@@ -11,19 +11,68 @@ namespace corde {
 
 void write_csv_header(std::ostream& out) { out << "t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw\n"; }
 
-void write_csv_rows(std::ostream& out, const World& world) {
-  char buf[320];
+namespace {
+
+// RFC 4180: a field with a comma, quote or line break is quoted, its quotes doubled.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+// The strain and energy checks, which cost about as much as a step's forces.
+std::string runaway_problem(const World& world, const RunOptions& o) {
   for (const Rod& rod : world.rods()) {
+    if (o.max_strain > 0.0)
+      for (int s = 0; s < rod.num_segments(); ++s) {
+        const double e = rod.stretch_strain(s);
+        if (!(std::abs(e) <= o.max_strain)) {
+          char buf[120];
+          std::snprintf(buf, sizeof buf, "': segment %d has an axial strain of %g", s, e);
+          return "rod '" + rod.name() + buf + " (runaway, limit max_strain)";
+        }
+      }
+    if (o.max_specific_energy > 0.0) {
+      double mass = 0.0;
+      for (double m : rod.node_masses()) mass += m;
+      const Energies e = rod.energies(world.gravity);
+      const double specific = (e.kinetic() + e.elastic()) / mass;
+      if (!(specific <= o.max_specific_energy)) {
+        char buf[120];
+        std::snprintf(buf, sizeof buf, "' has %g J/kg of kinetic + elastic energy", specific);
+        return "rod '" + rod.name() + buf + " (runaway, limit max_specific_energy)";
+      }
+    }
+  }
+  return "";
+}
+
+}  // namespace
+
+void write_csv_rows(std::ostream& out, const World& world) {
+  char buf[256];  // 12 numbers of at most 16 characters and the segment index
+  std::string row;
+  for (const Rod& rod : world.rods()) {
+    const std::string name = csv_field(rod.name());
     const auto& x = rod.positions();
     const auto& q = rod.orientations();
     for (int s = 0; s < rod.num_segments(); ++s) {
-      std::snprintf(buf, sizeof buf,
-                    "%.9g,%s,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", world.time(),
-                    rod.name().c_str(), s, x[s].x(), x[s].y(), x[s].z(), x[s + 1].x(), x[s + 1].y(),
-                    x[s + 1].z(), q[s].x(), q[s].y(), q[s].z(), q[s].w());
-      out << buf;
+      std::snprintf(buf, sizeof buf, "%.9g,", world.time());
+      row = buf;
+      row += name;
+      std::snprintf(buf, sizeof buf, ",%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", s,
+                    x[s].x(), x[s].y(), x[s].z(), x[s + 1].x(), x[s + 1].y(), x[s + 1].z(),
+                    q[s].x(), q[s].y(), q[s].z(), q[s].w());
+      row += buf;
+      out << row;
     }
   }
+}
+
+std::string run_problem(const World& world, const RunOptions& options) {
+  const std::string p = validity_problem(world, options.limits);
+  return p.empty() ? runaway_problem(world, options) : p;
 }
 
 RunResult run_scene(Scene* scene, const RunOptions& options) {
@@ -31,7 +80,17 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   World& world = scene->world;
   const double h = world.time_step;
   const double duration = options.duration >= 0.0 ? options.duration : scene->duration;
-  const long steps = std::max(0L, static_cast<long>(std::ceil(duration / h - 1e-9)));
+  // In double first: duration / h can exceed any integer (undefined behaviour when converted).
+  const double n = std::ceil(duration / h - 1e-9);
+  if (!(h > 0.0) || !(n <= options.max_steps)) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "duration %g s at time_step %g s needs %g steps, more than the limit of %g "
+                  "(max_steps)",
+                  duration, h, n, options.max_steps);
+    throw SceneError(buf);
+  }
+  const long steps = std::max(0L, static_cast<long>(n));
   RunResult r;
   r.every =
       options.every > 0 ? options.every : std::max(1, static_cast<int>(std::lround(0.01 / h)));
@@ -44,24 +103,30 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   const Clock::time_point start = Clock::now();
   Clock::time_point last_report = start;
   auto wall = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  auto write = [&] {
+    write_csv_rows(*options.csv, world);
+    if (!*options.csv) r.write_failed = true;
+  };
   if (options.csv) {
     write_csv_header(*options.csv);
-    write_csv_rows(*options.csv, world);
+    write();
   }
-  long written = 0;
-  for (long i = 1; i <= steps; ++i) {
+  for (long i = 1; i <= steps && !r.write_failed; ++i) {
     world.step();
     r.steps = i;
-    if (!world.finite()) {
-      r.finite = false;
+    const bool frame = options.csv && (i % r.every == 0 || i == steps);
+    // Every 8 steps (a blow-up grows over tens of steps; checking every step would cost about 10%
+    // of a small rod's step) and before every frame, so that no bad state is written.
+    const std::string problem =
+        frame || i % 8 == 0 || i == steps ? run_problem(world, options) : std::string();
+    if (!problem.empty()) {
+      r.ok = false;
+      r.problem = problem;
       r.failed_step = i;
       r.failed_time = world.time();
       break;
     }
-    if (options.csv && i % r.every == 0) {
-      write_csv_rows(*options.csv, world);
-      written = i;
-    }
+    if (frame) write();
     if (options.progress && (i & 255) == 0) {
       const Clock::time_point now = Clock::now();
       if (std::chrono::duration<double>(now - last_report).count() >= options.progress_interval) {
@@ -70,8 +135,6 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
       }
     }
   }
-  if (options.csv && r.finite && written != r.steps && r.steps > 0)
-    write_csv_rows(*options.csv, world);
   r.wall_seconds = wall();
   r.sim_time = world.time();
   r.energies = world.energies();
@@ -101,7 +164,7 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
                 r.wall_seconds, per_step, r.wall_seconds > 0 ? r.sim_time / r.wall_seconds : 0.0);
   out += buf;
   std::snprintf(buf, sizeof buf, "energy     kinetic %.6g J, elastic %.6g J%s\n",
-                r.energies.kinetic(), r.energies.elastic(), r.finite ? "" : " (at failure)");
+                r.energies.kinetic(), r.energies.elastic(), r.ok ? "" : " (at failure)");
   out += buf;
   return out;
 }

@@ -1,6 +1,7 @@
 // corde_run: runs a scene file without ROS and prints a summary (docs/scene_format.md).
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -15,12 +16,18 @@ namespace {
 
 const char* kUsage =
     "usage: corde_run SCENE.yaml [--duration S] [--dt H] [--set key.path=value ...]\n"
-    "                 [--out FILE.csv] [--every K] [--quiet]\n"
+    "                 [--out FILE.csv] [--every K] [--max-speed V] [--max-strain E]\n"
+    "                 [--max-energy J] [--max-steps N] [--quiet]\n"
     "  --duration S   simulated time (s), overrides the scene's duration\n"
     "  --dt H         time step (s), overrides the scene's time_step\n"
     "  --set K=V      override a scene key, e.g. --set rods.0.elements=100 (repeatable)\n"
     "  --out FILE     write t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw rows as CSV\n"
     "  --every K      CSV rows every K steps (default: every 10 ms of simulated time)\n"
+    "  --max-speed V  stop when a node moves faster than V m/s (default 100)\n"
+    "  --max-strain E stop when a segment's |axial strain| exceeds E (default 10; 0: off)\n"
+    "  --max-energy J stop when a rod's (kinetic + elastic energy) / mass exceeds J J/kg\n"
+    "                 (default 1e4; 0: off)\n"
+    "  --max-steps N  refuse runs of more than N steps (default 1e9)\n"
     "  --quiet        print only errors\n";
 
 int usage_error(const std::string& msg) {
@@ -35,6 +42,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> overrides;
   int every = 0;
   bool quiet = false;
+  corde::RunOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&](std::string* v) {
@@ -48,6 +56,19 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a == "--quiet" || a == "-q") {
       quiet = true;
+    } else if (a == "--max-speed" || a == "--max-strain" || a == "--max-energy" ||
+               a == "--max-steps") {
+      if (!value(&v)) return usage_error(a + " needs a value");
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      const bool zero_ok = a == "--max-strain" || a == "--max-energy";
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || x < 0.0 || (x == 0 && !zero_ok))
+        return usage_error(a + " needs a " + (zero_ok ? "non-negative" : "positive") +
+                           " number, got '" + v + "'");
+      if (a == "--max-speed") options.limits.max_speed = x;
+      if (a == "--max-strain") options.max_strain = x;
+      if (a == "--max-energy") options.max_specific_energy = x;
+      if (a == "--max-steps") options.max_steps = x;
     } else if (a == "--duration" || a == "--dt" || a == "--set" || a == "--out" || a == "--every") {
       if (!value(&v)) return usage_error(a + " needs a value");
       if (a == "--duration") overrides.push_back("duration=" + v);
@@ -90,7 +111,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "corde_run: warning: %s\n", w.c_str());
 
   std::ofstream csv;
-  corde::RunOptions options;
   options.every = every;
   if (!out_path.empty()) {
     csv.open(out_path);
@@ -112,18 +132,31 @@ int main(int argc, char** argv) {
       progress_shown = true;
     };
   }
-  const corde::RunResult result = corde::run_scene(&scene, options);
+  corde::RunResult result;
+  try {
+    result = corde::run_scene(&scene, options);
+  } catch (const corde::SceneError& e) {
+    std::fprintf(stderr, "corde_run: %s: %s\n", scene_path.c_str(), e.what());
+    return 1;
+  }
   if (progress_shown) std::fprintf(stderr, "\r\033[K");
+  bool write_failed = result.write_failed;
   if (csv.is_open()) {
     csv.close();
-    if (!csv) std::fprintf(stderr, "corde_run: error writing '%s'\n", out_path.c_str());
+    write_failed = write_failed || !csv;
   }
   if (!quiet) std::printf("%s", corde::run_summary(scene, result).c_str());
-  if (!result.finite) {
+  if (write_failed) {
+    std::fprintf(stderr, "corde_run: error writing '%s' (disk full?)%s\n", out_path.c_str(),
+                 result.write_failed ? "; the run stopped there" : "");
+    return 1;
+  }
+  if (!result.ok) {
     std::fprintf(stderr,
-                 "corde_run: the state became non-finite at step %ld (t = %.6g s); try a smaller "
-                 "time step (--dt)\n",
-                 result.failed_step, result.failed_time);
+                 "corde_run: the run blew up at step %ld (t = %.6g s): %s%s; try a smaller time "
+                 "step (--dt)\n",
+                 result.failed_step, result.failed_time, result.problem.c_str(),
+                 out_path.empty() ? "" : "; the CSV ends with the last frame before it");
     return 3;
   }
   return 0;

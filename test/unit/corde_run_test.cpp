@@ -41,7 +41,7 @@ TEST(SceneRunner, WritesCsvEveryKStepsAndAtTheEnd) {
   o.csv = &csv;
   o.every = 60;  // 200 steps: rows at steps 0, 60, 120, 180 and the final 200
   const RunResult r = run_scene(&s, o);
-  EXPECT_TRUE(r.finite);
+  EXPECT_TRUE(r.ok);
   EXPECT_EQ(r.steps, 200);
   EXPECT_NEAR(r.sim_time, 0.002, 1e-15);
   const std::vector<std::string> l = lines(csv.str());
@@ -61,7 +61,7 @@ TEST(SceneRunner, HoldsGraspsInPlace) {
   const Vec3 end = rod.positions()[4], before_end = rod.positions()[3];
   const Vec3 middle = rod.positions()[2];
   const RunResult r = run_scene(&s);
-  ASSERT_TRUE(r.finite);
+  ASSERT_TRUE(r.ok);
   EXPECT_LT((rod.positions()[4] - end).norm(), 1e-12);
   EXPECT_LT((rod.positions()[3] - before_end).norm(), 1e-12);
   EXPECT_GT((rod.positions()[2] - middle).norm(), 1e-6);  // gravity pulled the middle down
@@ -85,7 +85,7 @@ TEST(SceneRunner, StopsAtTheFirstNonFiniteState) {
   Scene s = parse_scene(kScene, {"time_step=2e-4", "duration=1"});
   ASSERT_FALSE(s.warnings.empty());
   const RunResult r = run_scene(&s);
-  EXPECT_FALSE(r.finite);
+  EXPECT_FALSE(r.ok);
   EXPECT_GT(r.failed_step, 0);
   EXPECT_LT(r.failed_step, 5000);
   EXPECT_EQ(r.steps, r.failed_step);
