@@ -330,25 +330,18 @@ void SimNode::publish_clock() {
 void SimNode::publish_due(double now) {
   // With /clock from this node, stamp 0 would read as "latest" (tf) or "unset": wait for t > 0.
   if (params_.publish_clock && sim_time() <= 0.0) return;
-  bool any = false;
   if (params_.publish_clock) publish_clock();
-  if (schedule_.take(OutputSchedule::kTf, now)) {
-    publish_tf();
-    any = true;
-  }
-  if (schedule_.take(OutputSchedule::kMarkers, now)) {
-    publish_markers();
-    any = true;
-  }
+  if (schedule_.take(OutputSchedule::kTf, now)) publish_tf();
+  if (schedule_.take(OutputSchedule::kMarkers, now)) publish_markers();
   // Statistics and reactions follow the state message (which runs at 2 Hz unpublished when off).
   if (schedule_.take(OutputSchedule::kState, now)) {
     update_stats(now);
     if (params_.state_rate > 0.0) publish_state();
     publish_reactions();
-    any = true;
+    // What is published passed check_state(): the state to fall back on (copied at this rate
+    // only; a copy reuses the snapshot's storage).
+    take_snapshot();
   }
-  // What was published passed check_state(): the state to fall back on.
-  if (any) take_snapshot();
 }
 
 void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
