@@ -304,6 +304,17 @@ TEST(SceneHardening, CountLimits) {
   EXPECT_TRUE(contains(error_of(grasps), "grasps: has 1001 grasps, more than the limit of 1000"));
 }
 
+TEST(SceneHardening, TotalElementsLimit) {
+  // Two rods at the per-rod limit fill the scene's budget (about 1 s to build): a third is refused
+  // before it is built.
+  const std::string rod = "  - {material: soft_cable, elements: 100000, shape: {type: straight}}\n";
+  const std::string e =
+      error_of("rods:\n" + rod + rod + "  - {material: soft_cable, shape: {type: straight}}\n");
+  EXPECT_EQ(e,
+            "rods[2]: the scene's rods would have 200050 elements together, more than the limit "
+            "of 200000 (line 4)");
+}
+
 // --- Messages -----------------------------------------------------------------------------------
 
 TEST(SceneHardening, HugeValuesAreNotEchoedWhole) {
