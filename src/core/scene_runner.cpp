@@ -1,5 +1,6 @@
 #include "corde_sim/scene_runner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -92,8 +93,9 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   }
   const long steps = std::max(0L, static_cast<long>(n));
   RunResult r;
-  r.every =
-      options.every > 0 ? options.every : std::max(1, static_cast<int>(std::lround(0.01 / h)));
+  r.every = options.every > 0
+                ? options.every
+                : static_cast<int>(std::clamp(std::round(0.01 / h), 1.0, 1e9));  // fits an int
   // Grasps hold their segments where they are (the ROS node moves them instead).
   for (const GraspSpec& spec : scene->grasps) {
     Rod& rod = world.rod(spec.rod);
@@ -107,11 +109,17 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
     write_csv_rows(*options.csv, world);
     if (!*options.csv) r.write_failed = true;
   };
+  r.problem = run_problem(world, options);  // the scene's own start (initial velocities...)
+  if (!r.problem.empty()) {
+    r.ok = false;
+    r.failed_step = 0;
+    r.failed_time = world.time();
+  }
   if (options.csv) {
     write_csv_header(*options.csv);
-    write();
+    if (r.ok) write();
   }
-  for (long i = 1; i <= steps && !r.write_failed; ++i) {
+  for (long i = 1; r.ok && i <= steps && !r.write_failed; ++i) {
     world.step();
     r.steps = i;
     const bool frame = options.csv && (i % r.every == 0 || i == steps);

@@ -141,6 +141,20 @@ TEST(SceneHardening, RunawayStrainAndEnergyChecks) {
   EXPECT_EQ(run_problem(s.world, o), "");
 }
 
+TEST(SceneHardening, BadStartWritesNoFrame) {
+  Scene s = parse_scene(kScene);
+  s.world.rods()[0].velocities()[2] = Vec3(500, 0, 0);
+  std::ostringstream csv;
+  RunOptions o;
+  o.csv = &csv;
+  const RunResult r = run_scene(&s, o);
+  EXPECT_FALSE(r.ok);
+  EXPECT_EQ(r.failed_step, 0);
+  EXPECT_EQ(r.steps, 0);
+  EXPECT_EQ(r.problem, "rod 'cable': node 2 moves at 500 m/s");
+  EXPECT_EQ(csv.str(), "t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw\n");
+}
+
 TEST(SceneHardening, ShippedScenesPassTheRunawayChecks) {
   // The defaults must not stop an honest run (the thread stretches to strain 2.2).
   Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/thread.yaml");
