@@ -16,25 +16,35 @@ packages=(
   # toolchain
   g++ make cmake pkg-config
   # rod library
-  libeigen3-dev libyaml-cpp-dev libfcl-dev liburdfdom-dev
+  libeigen3-dev libyaml-cpp-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # ROS 1 (Debian packages): build system, message generation, C++ client libraries
   ros-base-dev catkin python3-catkin-pkg ros-message-generation ros-message-runtime
   python3-genmsg python3-gencpp python3-genpy
-  libroscpp-dev libroslib-dev libtf2-dev libtf2-ros-dev libtf2-geometry-msgs-dev
-  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev libtf2-msgs-dev
+  libroscpp-dev libroslib-dev libtf2-dev libtf2-ros-dev
+  libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libnav-msgs-dev libtf2-msgs-dev
   libros-rosgraph-msgs-dev libdiagnostic-msgs-dev
   libvisualization-msgs-dev libdiagnostic-updater-dev libinteractive-markers-dev
+  # dynamic_reconfigure (cfg/Node.cfg): C++ headers, CMake macros and templates; the generator's
+  # Python half (without it the NodeConfig.h generation fails)
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
   python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
   python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
-  # rostests in python (test/ros/*_test.py) and command-line checks of the node (rostopic echo,
-  # rosservice call, tf_echo)
-  python3-numpy python3-std-msgs python3-geometry-msgs python3-tf2-msgs python3-rosgraph-msgs
-  python3-std-srvs python3-diagnostic-msgs python3-visualization-msgs python3-tf2-ros tf-tools
+  # robot example (launch/robot_example.launch): robot description, joint and link tf
+  ros-robot-state-publisher joint-state-publisher liburdf-dev
+  # python nodes and rostests (scripts/demo_arm_motion.py, test/ros/*_test.py) and command-line
+  # checks of the node (rostopic echo, rosservice call, tf_echo)
+  python3-numpy python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
+  python3-tf2-msgs python3-rosgraph-msgs python3-std-srvs python3-diagnostic-msgs
+  python3-visualization-msgs python3-tf2-ros tf-tools
+  # building in a catkin workspace (catkin build) and checking the package (catkin_lint)
+  catkin-tools catkin-lint
   # visualisation: rviz, headless X server with software OpenGL, screenshots, charts
   rviz librviz-dev xvfb xauth libgl1-mesa-dri x11-utils imagemagick python3-matplotlib
+  # validation references (scripts/timoshenko_frequencies.py)
+  python3-scipy
 )
 dev_packages=(clang-format)
 
