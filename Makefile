@@ -1,9 +1,9 @@
 # corde_sim: convenience targets around the plain CMake build in ./build (see README).
 #   make deps    install the Debian packages (scripts/install_deps.sh; fast when nothing is missing)
-#   make build   deps + configure (first time) + incremental build
-#   make run     build, then run the main job ($(RUN_CMD))
+#   make build   deps + configure (first time) + incremental build of `all` and `tests`
+#   make run     build (without the tests), then run the main job ($(RUN_CMD))
 #   make test    build, then every test through ctest (unit tests and rostests)
-#   make bench   build, then the benchmarks
+#   make bench   build (without the tests), then the benchmarks
 #   make format  clang-format over src, include, test
 #   make clean   remove the build folder
 SHELL := /bin/bash
@@ -25,7 +25,7 @@ RUN_CMD    ?= roslaunch corde_sim corde_sim.launch headless:=$(if $(DISPLAY),fal
 SOURCE_DEVEL = export PATH="/usr/bin:$$PATH"; \
   if [ -f $(BUILD_DIR)/devel/setup.bash ]; then source $(BUILD_DIR)/devel/setup.bash; fi
 
-.PHONY: all deps configure build run test bench format clean
+.PHONY: all deps configure build build-main run test bench format clean
 
 all: build
 
@@ -40,17 +40,24 @@ $(BUILD_DIR)/CMakeCache.txt:
 configure: deps
 	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
 
+# Test executables are not part of `all` (catkin's convention, so that a catkin workspace does not
+# compile them unless asked): `build` builds the `tests` target as well, so that ctest finds every
+# test; `build-main` (for run and bench) only `all`.
 build: deps
+	@$(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt
+	cmake --build $(BUILD_DIR) -j$(JOBS) --target all tests -- --no-print-directory
+
+build-main: deps
 	@$(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt
 	cmake --build $(BUILD_DIR) -j$(JOBS) -- --no-print-directory
 
-run: build
+run: build-main
 	$(SOURCE_DEVEL); $(RUN_CMD)
 
 test: build
 	$(SOURCE_DEVEL); cd $(BUILD_DIR) && ctest --output-on-failure $(CTEST_ARGS)
 
-bench: build
+bench: build-main
 	@if [ ! -x $(BUILD_DIR)/corde_bench ]; then echo "corde_bench is not built (src/tools/corde_bench.cpp missing?)"; exit 1; fi
 	./$(BUILD_DIR)/corde_bench $(BENCH_ARGS)
 
