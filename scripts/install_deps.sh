@@ -19,6 +19,8 @@ packages=(
   libeigen3-dev libyaml-cpp-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the scene reader's fuzz test (libFuzzer comes with libclang-rt-dev, only recommended by clang)
+  clang libclang-rt-dev
   # ROS 1 (Debian packages): build system, message generation, C++ client libraries
   ros-base-dev catkin python3-catkin-pkg ros-message-generation ros-message-runtime
   python3-genmsg python3-gencpp python3-genpy
