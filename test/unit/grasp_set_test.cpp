@@ -6,33 +6,27 @@
 
 #include <cmath>
 
-#include "corde_sim/rod_shape.h"
 #include "corde_sim/statics.h"
+#include "dynamics_util.h"
 
 namespace corde {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-// A 1 m rod along x at z = 1 (r = 1 cm, E = 1e7, rho = 1000) with internal friction tau.
+// The example rod of dynamics_util.h (1 m along x, r = 1 cm, E = 1e7, rho = 1000) at z = 1, named
+// "rod", with Kelvin-Voigt friction of retardation time tau.
 World example_world(int elements, double tau) {
-  Material m;
-  m.youngs_modulus = 1e7;
-  m.shear_modulus = 1e7 / 3.0;
-  m.stretch_modulus = 1e7;
-  m.density = 1000.0;
-  const double r = 0.01, area = kPi * r * r;
-  m.kappa = m.shear_modulus * area;
+  using dyn::example_material;
+  using dyn::kPi;
+  using dyn::straight_rod;
+  Material m = example_material();
+  const double area = kPi * 0.01 * 0.01;
   m.gamma_t = tau * 1e7 * area;
-  m.gamma_r = tau * 1e7 * area * r * r / 4.0;
-  RodSpec spec;
-  spec.name = "rod";
-  spec.elements = elements;
-  spec.section = make_section(m, r);
-  spec.shape.start = Vec3(0, 0, 1);
+  m.gamma_r = tau * 1e7 * area * 0.01 * 0.01 / 4.0;
+  Rod rod = straight_rod(m, 0.01, 1.0, elements);
+  for (Vec3& x : rod.positions()) x.z() += 1.0;
   World w;
   w.time_step = 1e-5;
-  w.add_rod(build_rod(spec));
+  w.add_rod(std::move(rod));
   return w;
 }
 
