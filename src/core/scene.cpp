@@ -152,6 +152,33 @@ std::vector<Value> limited_items(const Value& list, int limit, const char* what)
   return list.items();
 }
 
+// Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
+// coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
+// q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
+// circumference).
+Drag read_drag(const Value& v, double radius) {
+  Map m(v);
+  Drag d;
+  if (auto p = m.find("linear_normal")) d.linear_normal = p->non_negative();
+  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->non_negative();
+  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->non_negative();
+  if (auto p = m.find("quadratic_tangential")) d.quadratic_tangential = p->non_negative();
+  if (auto rho = m.find("fluid_density")) {
+    if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
+      rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
+    const double density = rho->non_negative();
+    double cd = 1.2, cf = 0.0;
+    if (auto p = m.find("drag_coefficient")) cd = p->non_negative();
+    if (auto p = m.find("friction_coefficient")) cf = p->non_negative();
+    d.quadratic_normal = density * cd * radius;
+    d.quadratic_tangential = density * cf * M_PI * radius;
+  } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
+    m.fail("drag_coefficient and friction_coefficient need fluid_density");
+  }
+  m.finish();
+  return d;
+}
+
 struct RodEntry {
   std::string path;
   Owners owners;
@@ -188,6 +215,7 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
   } catch (const std::invalid_argument& e) {
     throw SceneError(v.path() + ".shape: " + e.what());
   }
+  if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
   RodEntry entry{v.path(), {}};
   if (auto b = m.find("boundary"))
     for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))

@@ -315,3 +315,35 @@ TEST(SceneParse, MaxStrainFromPresetOrKey) {
 
 }  // namespace
 }  // namespace corde
+
+namespace corde {
+namespace {
+
+TEST(SceneParse, DragCoefficientsOrFluid) {
+  const std::string rod =
+      "rods:\n  - {material: soft_cable, radius: 0.004, shape: {type: straight}, ";
+  const Scene a = parse_scene(rod + "drag: {linear_normal: 0.5, quadratic_tangential: 0.01}}\n");
+  EXPECT_DOUBLE_EQ(a.world.rods()[0].drag().linear_normal, 0.5);
+  EXPECT_DOUBLE_EQ(a.world.rods()[0].drag().quadratic_tangential, 0.01);
+  // Air at 1.2 kg/m^3 on a 4 mm cylinder: q_n = rho C_d r, q_t = rho C_f pi r.
+  const Scene b =
+      parse_scene(rod +
+                  "drag: {fluid_density: 1.2, drag_coefficient: 1.1, friction_coefficient: "
+                  "0.02}}\n");
+  EXPECT_DOUBLE_EQ(b.world.rods()[0].drag().quadratic_normal, 1.2 * 1.1 * 0.004);
+  EXPECT_DOUBLE_EQ(b.world.rods()[0].drag().quadratic_tangential, 1.2 * 0.02 * M_PI * 0.004);
+  EXPECT_FALSE(parse_scene(rod + "}\n").world.rods()[0].drag().active());
+  for (const char* bad :
+       {"drag: {linear_normal: -1}}\n", "drag: {fluid_density: 1.2, quadratic_normal: 1}}\n",
+        "drag: {drag_coefficient: 1}}\n", "drag: {speed: 1}}\n"}) {
+    try {
+      parse_scene(rod + bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("rods[0].drag"), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace corde
