@@ -6,8 +6,10 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <string>
 
+#include "corde_sim/motion.h"
 #include "corde_sim/rod.h"
 
 namespace corde {
@@ -18,6 +20,9 @@ struct GraspSpec {
   enum class Place { kStart, kEnd, kNode, kArcLength } place = Place::kEnd;
   double value = 0.0;            // node index or arc length (m) for kNode / kArcLength
   bool hold_orientation = true;  // hold the frame too (rotating the holder twists the rod)
+  // Keyframed motion of the holder from where it takes hold (its pose then: segment_pose()), about
+  // the holder's origin; null: the holder stays (corde_run) or follows its inputs (the node).
+  std::shared_ptr<const Motion> motion;
 };
 
 struct Grasp {

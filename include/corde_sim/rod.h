@@ -65,6 +65,13 @@ class Rod {
   }
   const std::vector<NodeDrive>& node_drives() const { return node_drives_; }
   const std::vector<SegmentDrive>& segment_drives() const { return segment_drives_; }
+  // Sliding and hinge constraints (boundary.h); one per node or segment, replacing an earlier
+  // one. They may not share a node or segment with a drive (std::invalid_argument), and
+  // directions are normalised. Throw std::out_of_range for items the rod does not have.
+  void add_node_constraint(const NodeConstraint& c);
+  void add_segment_constraint(const SegmentConstraint& c);
+  const std::vector<NodeConstraint>& node_constraints() const { return node_constraints_; }
+  const std::vector<SegmentConstraint>& segment_constraints() const { return segment_constraints_; }
   // Throws std::out_of_range for a node or segment the rod does not have.
   void add_load(const Load& l);
   std::vector<Load>& loads() { return loads_; }
@@ -143,6 +150,8 @@ class Rod {
   std::vector<double> fs_, ww_, tc_, ta_, tb_, tw_;
   std::vector<NodeDrive> node_drives_;
   std::vector<SegmentDrive> segment_drives_;
+  std::vector<NodeConstraint> node_constraints_;
+  std::vector<SegmentConstraint> segment_constraints_;
   std::vector<Load> loads_;
   std::vector<Vec3> ext_f_, ext_tau_;  // empty until the first external force or torque
   bool has_external_ = false;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "corde_sim/grasp.h"
+#include "corde_sim/reactions.h"
 #include "corde_sim/world.h"
 
 namespace corde {
@@ -31,6 +32,9 @@ struct Scene {
   World world;            // rods built, drives/loads applied, gravity, time step
   double duration = 1.0;  // s
   std::vector<GraspSpec> grasps;
+  // Every boundary entry of every rod (clamps, drives, constraints), for their reactions; grasps
+  // are supports too (corde_run adds them when it takes hold).
+  std::vector<Support> supports;
   std::string name, description, source;
   // Problems that do not stop a run, e.g. a time step above the estimated stability limit.
   std::vector<std::string> warnings;

@@ -15,6 +15,9 @@ struct RunOptions {
   double duration = -1.0;       // s; < 0: the scene's duration
   int every = 0;                // CSV rows every K steps (and at the start and end); 0: auto
   std::ostream* csv = nullptr;  // where to write the trajectory, or none
+  // Where to write the supports' reactions and the rods' energies at the same frames (or none).
+  std::ostream* reactions = nullptr;
+  std::ostream* energies = nullptr;
   // Called about every `progress_interval` seconds of wall time with the fraction done.
   std::function<void(double fraction, double sim_time, double wall_seconds)> progress;
   double progress_interval = 0.25;
@@ -51,10 +54,21 @@ void write_csv_header(std::ostream& out);
 // name with a comma, quote or line break is quoted as in RFC 4180.
 void write_csv_rows(std::ostream& out, const World& world);
 
+// Reactions CSV: t,support,rod,fx,fy,fz,mx,my,mz,px,py,pz: per support (Scene::supports), the
+// force and moment it exerts on the rod over the last step (world frame, N and N m, the moment
+// about p), reactions.h.
+void write_reaction_header(std::ostream& out);
+void write_reaction_rows(std::ostream& out, const Scene& scene);
+// Energies CSV: t,rod,kinetic_translation,kinetic_rotation,stretch,bend_twist,coupling,gravity,
+// total (J; gravity's potential is zero at the world origin; total is their sum).
+void write_energy_header(std::ostream& out);
+void write_energy_rows(std::ostream& out, const World& world);
+
 // "" if the world passes the runaway checks of `options`, else the first problem found.
 std::string run_problem(const World& world, const RunOptions& options);
 
-// Steps the scene's world for the duration, holding each grasp where it is at the start. Stops
+// Steps the scene's world for the duration, holding each grasp where it is at the start or moving
+// it along its keyframes (GraspSpec::motion). Reactions are written from the first step on. Stops
 // at the first state that fails run_problem() (checked every 8 steps and before every CSV frame,
 // so the CSV ends with the last frame that passed) or when the CSV cannot be written. Throws
 // SceneError if the duration needs more than options.max_steps steps (or the step is not > 0).

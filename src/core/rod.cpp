@@ -120,6 +120,41 @@ void Rod::add_segment_drive(const SegmentDrive& d) {
   seg_free_[d.segment] = 0.0;
 }
 
+void Rod::add_node_constraint(const NodeConstraint& c) {
+  if (c.node < 0 || c.node >= num_nodes())
+    throw std::out_of_range("rod '" + name_ + "' has no node " + std::to_string(c.node));
+  if (node_drive(c.node))
+    throw std::invalid_argument("node " + std::to_string(c.node) + " is driven");
+  if (!(c.direction.allFinite() && c.direction.norm() > 0.0) || !c.point.allFinite())
+    throw std::invalid_argument("a constraint needs a finite point and a non-zero direction");
+  NodeConstraint k = c;
+  k.direction.normalize();
+  for (NodeConstraint& e : node_constraints_)
+    if (e.node == c.node) {
+      e = k;
+      return;
+    }
+  node_constraints_.push_back(k);
+}
+
+void Rod::add_segment_constraint(const SegmentConstraint& c) {
+  if (c.segment < 0 || c.segment >= num_segments())
+    throw std::out_of_range("rod '" + name_ + "' has no segment " + std::to_string(c.segment));
+  if (segment_drive(c.segment))
+    throw std::invalid_argument("segment " + std::to_string(c.segment) + " is driven");
+  if (!(c.axis.allFinite() && c.axis.norm() > 0.0))
+    throw std::invalid_argument("a hinge needs a finite non-zero axis");
+  SegmentConstraint k = c;
+  k.axis.normalize();
+  k.origin.normalize();
+  for (SegmentConstraint& e : segment_constraints_)
+    if (e.segment == c.segment) {
+      e = k;
+      return;
+    }
+  segment_constraints_.push_back(k);
+}
+
 bool Rod::remove_node_drive(int node) {
   auto it = std::find_if(node_drives_.begin(), node_drives_.end(),
                          [&](const NodeDrive& d) { return d.node == node; });
@@ -457,18 +492,21 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
   // The ends: ghost-frame clamps or nothing. The end frames are not integrated before this.
   double unused[3];
   if (b0 == 0) {
-    if (ghost_[0].active)
+    if (ghost_[0].active) {
+      double* t0 = tb - 3 * off;
       bend_element(ghost_[0].frame.coeffs().data(), q, 0.5 * rest_[0], 2.0 / rest_[0], kb, kt,
-                   ghost_[0].uhat.data(), unused, tb - 3 * off);
-    else
+                   ghost_[0].uhat.data(), unused, t0);
+      ghost_[0].reaction = q_[0] * Vec3(t0[0], t0[1], t0[2]);
+    } else
       std::fill(tb - 3 * off, tb - 3 * off + 3, 0.0);
   }
   if (b1 == n) {
     double* ta_end = ta + 3 * (n - 1 - off);
-    if (ghost_[1].active)
+    if (ghost_[1].active) {
       bend_element(q + 4 * (n - 1), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
                    2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta_end, unused);
-    else
+      ghost_[1].reaction = q_[n - 1] * Vec3(ta_end[0], ta_end[1], ta_end[2]);
+    } else
       std::fill(ta_end, ta_end + 3, 0.0);
   }
   torque_pass(r.seg0, r.seg1, off, q, tc, ta, tb, tw, tau_.data()->data());
@@ -481,9 +519,9 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
     const double scale = l.scale(t);
     if (scale == 0.0) continue;
     if (force)
-      f_[l.index] += scale * l.value;
+      f_[l.index] += scale * (l.follower ? q_[std::min(l.index, n - 1)] * l.value : l.value);
     else
-      tau_[l.index] += q_[l.index].conjugate() * (scale * l.value);
+      tau_[l.index] += scale * (l.follower ? l.value : q_[l.index].conjugate() * l.value);
   }
   if (drag_.active()) drag_block(r.node0, r.node1);
   if (has_external_) {
@@ -518,51 +556,76 @@ void Rod::step(double t, double h, const Vec3& gravity) {
   apply_drives(t + h, h);
 }
 
+// Sets the kinematic items to their drives' state at the step's end and projects the
+// constrained ones; each records the force or torque it took (a reaction, what a load cell in the
+// support reads with the opposite sign): m dv/dt - f for a node, I dw/dt + w x I w - tau for a
+// segment, from the velocities before and after (the integrator left kinematic ones unchanged).
 void Rod::apply_drives(double t_end, double h) {
-  for (const NodeDrive& d : node_drives_) {
+  for (NodeDrive& d : node_drives_) {
     Vec3& x = x_[d.node];
     Vec3& v = v_[d.node];
-    switch (d.kind) {
-      case NodeDrive::Kind::kFixed:
-        x = d.origin;
-        v.setZero();
-        break;
-      case NodeDrive::Kind::kVelocity: {
-        const double dt = std::max(0.0, t_end - d.t_start);
-        x = d.origin + dt * d.velocity;
-        v = t_end > d.t_start ? d.velocity : Vec3::Zero();
-        break;
-      }
-      case NodeDrive::Kind::kTarget:
-        v = (d.target - x) / h;
-        x = d.target;
-        break;
+    const Vec3 v_old = v;
+    if (d.kind == NodeDrive::Kind::kTarget) {
+      v = (d.target - x) / h;
+      x = d.target;
+    } else {
+      x = drive_position(d, t_end, &v);
     }
+    d.reaction = mass_[d.node] * (v - v_old) / h - f_[d.node];
   }
-  for (const SegmentDrive& d : segment_drives_) {
+  for (SegmentDrive& d : segment_drives_) {
     Quat& q = q_[d.segment];
     Vec3& w = w_[d.segment];
-    switch (d.kind) {
-      case SegmentDrive::Kind::kFixed:
-        q = d.origin;
-        w.setZero();
-        break;
-      case SegmentDrive::Kind::kSpin: {
-        const double angle = d.rate * std::max(0.0, t_end - d.t_start);
-        q = d.origin * Quat(Eigen::AngleAxisd(angle, Vec3::UnitZ()));
-        w = t_end > d.t_start ? Vec3(0.0, 0.0, d.rate) : Vec3::Zero();
-        break;
-      }
-      case SegmentDrive::Kind::kTarget: {
-        Quat target = d.target.normalized();
-        if (target.coeffs().dot(q.coeffs()) < 0.0) target.coeffs() *= -1.0;
-        const Eigen::AngleAxisd delta(q.conjugate() * target);
-        w = (delta.angle() / h) * delta.axis();
-        q = target;
-        break;
-      }
+    const Vec3 w_old = w;
+    const Quat q_old = q;
+    if (d.kind == SegmentDrive::Kind::kTarget) {
+      Quat target = d.target.normalized();
+      if (target.coeffs().dot(q.coeffs()) < 0.0) target.coeffs() *= -1.0;
+      const Eigen::AngleAxisd delta(q.conjugate() * target);
+      w = (delta.angle() / h) * delta.axis();
+      q = target;
+    } else {
+      Vec3 w_world;
+      q = drive_orientation(d, t_end, &w_world);
+      w = q.conjugate() * w_world;
     }
+    const Vec3& in = inertia_[d.segment];
+    const Vec3 body =
+        in.cwiseProduct(w - w_old) / h + w_old.cross(in.cwiseProduct(w_old)) - tau_[d.segment];
+    d.reaction = q_old * body;
   }
+  for (NodeConstraint& c : node_constraints_) {
+    Vec3& x = x_[c.node];
+    Vec3& v = v_[c.node];
+    const Vec3& a = c.direction;
+    const Vec3 v_free = v;
+    if (c.kind == NodeConstraint::Kind::kLine) {
+      x = c.point + a * a.dot(x - c.point);
+      v = a * a.dot(v);
+    } else {
+      x -= a * a.dot(x - c.point);
+      v -= a * a.dot(v);
+    }
+    c.reaction = mass_[c.node] * (v - v_free) / h;
+  }
+  for (SegmentConstraint& c : segment_constraints_) {
+    Quat& q = q_[c.segment];
+    Vec3& w = w_[c.segment];
+    // Keep the twist part of q origin^-1 about the axis (swing-twist decomposition).
+    const Quat rel = q * c.origin.conjugate();
+    const double along = rel.vec().dot(c.axis);
+    Quat twist(rel.w(), along * c.axis.x(), along * c.axis.y(), along * c.axis.z());
+    if (twist.norm() < 1e-12) twist = Quat::Identity();  // a half turn about a normal: ambiguous
+    twist.normalize();
+    const Vec3 w_free = w;
+    const Quat q_free = q;
+    q = (twist * c.origin).normalized();
+    w = q.conjugate() * (c.axis * c.axis.dot(q_free * w_free));
+    const Vec3& in = inertia_[c.segment];
+    c.reaction = (q * in.cwiseProduct(w) - q_free * in.cwiseProduct(w_free)) / h;
+  }
+  for (GhostFrame& g : ghost_)
+    if (g.active && g.motion) g.frame = ghost_frame_at(g, t_end);
 }
 
 Energies Rod::energies(const Vec3& gravity) const {

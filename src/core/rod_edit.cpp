@@ -184,10 +184,19 @@ Rod resample_rod(const Rod& rod, int elements) {
     d.segment = new_segment(d.segment);
     out.add_segment_drive(d);
   }
+  for (NodeConstraint c : rod.node_constraints()) {
+    c.node = new_node(c.node);
+    if (!out.node_drive(c.node)) out.add_node_constraint(c);
+  }
+  for (SegmentConstraint c : rod.segment_constraints()) {
+    c.segment = new_segment(c.segment);
+    if (!out.segment_drive(c.segment)) out.add_segment_constraint(c);
+  }
   for (Load load : rod.loads()) {
     load.index = load.kind == Load::Kind::kForce ? new_node(load.index) : new_segment(load.index);
     out.add_load(load);
   }
+  out.set_drag(rod.drag());
   out.ghost_start() = rod.ghost_start();
   out.ghost_end() = rod.ghost_end();
   return out;

@@ -16,8 +16,11 @@ namespace corde {
 namespace {
 
 using scene_detail::echo;
+using scene_detail::has_motion;
 using scene_detail::Map;
+using scene_detail::MotionStart;
 using scene_detail::num;
+using scene_detail::read_motion;
 using scene_detail::Value;
 
 // Which entry constrains each node and segment of a rod, to reject conflicting constraints.
@@ -52,70 +55,164 @@ int read_index(const Value& v, int count, const char* what) {
   return static_cast<int>(d);
 }
 
-void read_boundary(const Value& entry, Rod* rod, Owners* owners) {
+// The one mode an entry gives among `modes` and a keyframed drive (keyframes, move_by, turns).
+std::string entry_mode(const Map& b, const std::vector<std::string>& modes, bool motion_ok) {
+  std::vector<std::string> present;
+  for (const std::string& k : modes)
+    if (b.has(k)) present.push_back(k);
+  if (motion_ok && has_motion(b)) present.push_back("motion");
+  if (present.size() == 1) return present[0];
+  std::string list;
+  for (const std::string& k : modes) list += k + ", ";
+  list += motion_ok ? "keyframes, move_by or turns" : "";
+  b.fail(present.empty() ? "needs one of " + list : "give only one of " + list);
+}
+
+// Where and how an entry drives: the item's start and what its keyframes may move.
+MotionStart start_of(const Rod& rod, int node, int seg, bool translates, bool rotates) {
+  MotionStart m;
+  m.position = rod.positions()[node];
+  m.orientation = rod.orientations()[seg];
+  m.tangent = director3(m.orientation);
+  m.translates = translates;
+  m.rotates = rotates;
+  return m;
+}
+
+void read_boundary(const Value& entry, Rod* rod, Owners* owners, const std::string& base,
+                   Support* support) {
   Map b(entry);
   const std::string kind = b.one_of({"node", "segment", "clamp"});
   const std::string owner = entry.path();
   const int n = rod->num_segments();
+  support->rod = rod->name();
+  support->name = rod->name() + "/" + owner.substr(owner.rfind('.') + 1);
   if (kind == "node") {
     const Value nv = b.get("node");
     const int node = read_index(nv, n + 1, "node");
+    support->nodes = {node};
+    owners->claim(&owners->node, node, "node", nv, owner);
+    const std::string mode = entry_mode(b, {"fix", "velocity", "line", "plane"}, true);
+    if (mode == "line" || mode == "plane") {
+      NodeConstraint c;
+      c.kind = mode == "line" ? NodeConstraint::Kind::kLine : NodeConstraint::Kind::kPlane;
+      c.node = node;
+      c.point = rod->positions()[node];
+      c.direction = b.get(mode).nonzero_vec3();
+      rod->add_node_constraint(c);
+      b.finish();
+      return;
+    }
     NodeDrive d;
     d.node = node;
-    d.origin = rod->positions()[node];
-    if (b.one_of({"fix", "velocity"}) == "fix") {
+    d.origin = d.pivot = rod->positions()[node];
+    if (mode == "fix") {
       const Value f = b.get("fix");
       if (!f.boolean()) f.fail("must be true (leave the entry out for a free node)");
       d.kind = NodeDrive::Kind::kFixed;
-    } else {
+    } else if (mode == "velocity") {
       d.kind = NodeDrive::Kind::kVelocity;
       d.velocity = b.get("velocity").vec3();
       if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+    } else {
+      d.kind = NodeDrive::Kind::kMotion;
+      d.motion = read_motion(&b, start_of(*rod, node, std::min(node, n - 1), true, false), base);
     }
-    owners->claim(&owners->node, node, "node", nv, owner);
     rod->add_node_drive(d);
   } else if (kind == "segment") {
     const Value sv = b.get("segment");
     const int seg = read_index(sv, n, "segment");
+    support->segments = {seg};
+    owners->claim(&owners->segment, seg, "segment", sv, owner);
+    const std::string mode = entry_mode(b, {"fix", "spin_rate", "free_axis"}, true);
+    if (mode == "free_axis") {
+      SegmentConstraint c;
+      c.segment = seg;
+      c.origin = rod->orientations()[seg];
+      const Value a = b.get("free_axis");
+      c.axis =
+          a.is_scalar() && a.node().Scalar() == "tangent" ? director3(c.origin) : a.nonzero_vec3();
+      rod->add_segment_constraint(c);
+      b.finish();
+      return;
+    }
     SegmentDrive d;
     d.segment = seg;
     d.origin = rod->orientations()[seg];
-    if (b.one_of({"fix", "spin_rate"}) == "fix") {
+    if (mode == "fix") {
       const Value f = b.get("fix");
       if (!f.boolean()) f.fail("must be true (leave the entry out for a free segment)");
       d.kind = SegmentDrive::Kind::kFixed;
-    } else {
+    } else if (mode == "spin_rate") {
       d.kind = SegmentDrive::Kind::kSpin;
       d.rate = b.get("spin_rate").number();
       if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+    } else {
+      d.kind = SegmentDrive::Kind::kMotion;
+      d.motion = read_motion(&b, start_of(*rod, seg, seg, false, true), base);
     }
-    owners->claim(&owners->segment, seg, "segment", sv, owner);
     rod->add_segment_drive(d);
   } else {
     const Value cv = b.get("clamp");
     const bool end = cv.choice({"start", "end"}) == "end";
+    support->name = rod->name() + "/clamp " + (end ? "end" : "start");
     std::string how = "ghost";
     if (auto k = b.find("kind")) how = k->choice({"natural", "ghost"});
     const int node = end ? n : 0, seg = end ? n - 1 : 0;
-    NodeDrive nd;
-    nd.node = node;
-    nd.origin = rod->positions()[node];
+    support->nodes = {node};
+    const Quat frame = rod->orientations()[seg];
+    const Vec3 tangent = director3(frame);
+    std::optional<Value> slide = b.find("slide");
+    bool twist_free = false;
+    if (auto t = b.find("twist")) twist_free = t->choice({"held", "free"}) == "free";
+    if (twist_free && how != "natural")
+      b.fail("twist: free needs kind: natural (a ghost clamp holds the end frame fully)");
+    if (slide && has_motion(b)) slide->fail("a sliding clamp cannot also be moved by keyframes");
+    const std::shared_ptr<const Motion> motion =
+        read_motion(&b, start_of(*rod, node, seg, true, !twist_free), base);
     owners->claim(&owners->node, node, "node", cv, owner);
-    rod->add_node_drive(nd);
+    if (slide && !(slide->is_scalar() && slide->node().Scalar() == "false")) {
+      NodeConstraint c;
+      c.kind = NodeConstraint::Kind::kLine;
+      c.node = node;
+      c.point = rod->positions()[node];
+      c.direction = slide->is_scalar() && slide->boolean() ? tangent : slide->nonzero_vec3();
+      rod->add_node_constraint(c);
+    } else {
+      NodeDrive nd;
+      nd.node = node;
+      nd.origin = nd.pivot = rod->positions()[node];
+      if (motion) {
+        nd.kind = NodeDrive::Kind::kMotion;
+        nd.motion = motion;
+      }
+      rod->add_node_drive(nd);
+    }
     if (how == "natural") {
-      SegmentDrive sd;
-      sd.segment = seg;
-      sd.origin = rod->orientations()[seg];
+      support->segments = {seg};
       owners->claim(&owners->segment, seg, "segment", cv, owner);
-      rod->add_segment_drive(sd);
+      if (twist_free) {
+        rod->add_segment_constraint(SegmentConstraint{seg, frame, tangent, Vec3::Zero()});
+      } else {
+        SegmentDrive sd;
+        sd.segment = seg;
+        sd.origin = frame;
+        if (motion) {
+          sd.kind = SegmentDrive::Kind::kMotion;
+          sd.motion = motion;
+        }
+        rod->add_segment_drive(sd);
+      }
     } else {
       if (!owners->ghost[end].empty())
         cv.fail("the " + cv.node().Scalar() + " is already clamped by " + owners->ghost[end]);
       owners->ghost[end] = owner;
+      support->ghost = end ? 1 : 0;
       GhostFrame& g = end ? rod->ghost_end() : rod->ghost_start();
       g.active = true;
-      g.frame = rod->orientations()[seg];
+      g.frame = g.origin = frame;
       g.uhat.setZero();
+      g.motion = motion;
     }
   }
   b.finish();
@@ -140,6 +237,7 @@ void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings)
   }
   if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative();
   if (auto t = m.find("start_time")) l.t_start = t->non_negative();
+  if (auto k = m.find("kind")) l.follower = k->choice({"dead", "follower"}) == "follower";
   m.finish();
   rod->add_load(l);
 }
@@ -184,7 +282,8 @@ struct RodEntry {
   Owners owners;
 };
 
-void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* entries) {
+void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* entries,
+              const std::string& base) {
   Map m(v);
   RodSpec spec;
   spec.name = "rod" + std::to_string(index);
@@ -216,10 +315,14 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
     throw SceneError(v.path() + ".shape: " + e.what());
   }
   if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
+  if (auto i = m.find("initial")) scene_detail::read_initial(*i, rod);
   RodEntry entry{v.path(), {}};
   if (auto b = m.find("boundary"))
-    for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))
-      read_boundary(item, rod, &entry.owners);
+    for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries")) {
+      Support support;
+      read_boundary(item, rod, &entry.owners, base, &support);
+      scene->supports.push_back(support);
+    }
   if (auto l = m.find("loads"))
     for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
       read_load(item, rod, &scene->warnings);
@@ -228,7 +331,7 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
 }
 
 GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* entries,
-                     std::map<std::string, std::string>* names) {
+                     std::map<std::string, std::string>* names, const std::string& base) {
   Map m(v);
   GraspSpec g;
   const Value nv = m.get("name");
@@ -275,6 +378,14 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
     }
   }
   if (auto p = m.find("hold_orientation")) g.hold_orientation = p->boolean();
+  {
+    const int seg = grasp_segment(rod, g);
+    MotionStart start;
+    start.position = 0.5 * (rod.positions()[seg] + rod.positions()[seg + 1]);
+    start.orientation = rod.orientations()[seg];
+    start.tangent = director3(start.orientation);
+    g.motion = read_motion(&m, start, base);
+  }
   m.finish();
   // A grasp drives its segment and both of its nodes: nothing else may.
   Owners& owners = (*entries)[r].owners;
@@ -388,12 +499,27 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   const Value rods = top.get("rods");
   const std::vector<Value> items = limited_items(rods, SceneLimits::max_rods, "rods");
   if (items.empty()) rods.fail("needs at least one rod");
+  // Relative paths in the scene (keyframe files) are relative to the scene file's folder.
+  const size_t slash = source.find_last_of('/');
+  const std::string base = source == "<string>" || slash == std::string::npos
+                               ? std::string()
+                               : (slash == 0 ? std::string("/") : source.substr(0, slash));
   for (size_t i = 0; i < items.size(); ++i)
-    read_rod(items[i], static_cast<int>(i), &scene, &entries);
+    read_rod(items[i], static_cast<int>(i), &scene, &entries, base);
   if (auto g = top.find("grasps")) {
     std::map<std::string, std::string> names;
-    for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps"))
-      scene.grasps.push_back(read_grasp(item, scene, &entries, &names));
+    for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps")) {
+      scene.grasps.push_back(read_grasp(item, scene, &entries, &names, base));
+      const GraspSpec& spec = scene.grasps.back();
+      const int seg = grasp_segment(scene.world.rod(spec.rod), spec);
+      Support support;
+      support.name = spec.name;
+      support.rod = spec.rod;
+      support.nodes = {seg, seg + 1};
+      if (spec.hold_orientation) support.segments = {seg};
+      support.midpoint_of = seg;
+      scene.supports.push_back(support);
+    }
   }
   top.finish();
   check_time_step(&scene, step_given ? &*step : nullptr);

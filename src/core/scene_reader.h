@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -11,6 +12,8 @@
 
 #include "corde_sim/energy_terms.h"
 #include "corde_sim/material.h"
+#include "corde_sim/motion.h"
+#include "corde_sim/rod.h"
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
 
@@ -82,6 +85,23 @@ class Map {
 Section read_section(Map* rod);
 // The `shape` of a rod (scene_material.cpp).
 RodShape read_shape(const Value& v);
+
+// Where a driven item starts, for keyframes given as absolute poses, and what it may do.
+struct MotionStart {
+  Vec3 position = Vec3::Zero();
+  Quat orientation = Quat::Identity();
+  Vec3 tangent = Vec3::UnitZ();  // the axis of `turns`
+  bool translates = true, rotates = true;
+};
+// Whether the entry has any of the keys of a keyframed drive (keyframes, move_by, turns,
+// ramp_time, interpolation).
+bool has_motion(const Map& m);
+// The keyframed drive of an entry (keyframes, or move_by/turns over ramp_time from start_time),
+// or null when it has none (scene_motion.cpp). Keyframe files are read relative to `base`.
+std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
+                                          const std::string& base);
+// A rod's `initial` key: velocities, spins, a seeded perturbation (scene_motion.cpp).
+void read_initial(const Value& v, Rod* rod);
 
 // Applies "key.path=value" overrides to the tree (see parse_scene()). Returns, per override, the
 // path it set in message form ("rods[0].elements").

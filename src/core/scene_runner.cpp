@@ -71,6 +71,41 @@ void write_csv_rows(std::ostream& out, const World& world) {
   }
 }
 
+void write_reaction_header(std::ostream& out) {
+  out << "t,support,rod,fx,fy,fz,mx,my,mz,px,py,pz\n";
+}
+
+void write_reaction_rows(std::ostream& out, const Scene& scene) {
+  char buf[320];
+  for (const Support& support : scene.supports) {
+    const Wrench w = support_reaction(scene.world.rod(support.rod), support);
+    std::snprintf(buf, sizeof buf, "%.9g,", scene.world.time());
+    std::string row = buf;
+    row += csv_field(support.name) + "," + csv_field(support.rod);
+    std::snprintf(buf, sizeof buf, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", w.force.x(),
+                  w.force.y(), w.force.z(), w.moment.x(), w.moment.y(), w.moment.z(), w.point.x(),
+                  w.point.y(), w.point.z());
+    out << row << buf;
+  }
+}
+
+void write_energy_header(std::ostream& out) {
+  out << "t,rod,kinetic_translation,kinetic_rotation,stretch,bend_twist,coupling,gravity,total\n";
+}
+
+void write_energy_rows(std::ostream& out, const World& world) {
+  char buf[320];
+  for (const Rod& rod : world.rods()) {
+    const Energies e = rod.energies(world.gravity);
+    std::snprintf(buf, sizeof buf, "%.9g,", world.time());
+    std::string row = buf + csv_field(rod.name());
+    std::snprintf(buf, sizeof buf, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", e.kinetic_translation,
+                  e.kinetic_rotation, e.stretch, e.bend_twist, e.coupling, e.gravity,
+                  e.kinetic() + e.elastic() + e.gravity);
+    out << row << buf;
+  }
+}
+
 std::string run_problem(const World& world, const RunOptions& options) {
   const std::string p = validity_problem(world, options.limits);
   return p.empty() ? runaway_problem(world, options) : p;
@@ -96,18 +131,41 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   r.every = options.every > 0
                 ? options.every
                 : static_cast<int>(std::clamp(std::round(0.01 / h), 1.0, 1e9));  // fits an int
-  // Grasps hold their segments where they are (the ROS node moves them instead).
+  // Grasps hold their segments where they are or move them along their keyframes (the ROS node
+  // moves them from its inputs instead).
+  struct Held {
+    Rod* rod;
+    Grasp grasp;
+    Eigen::Isometry3d start;
+    const Motion* motion;
+  };
+  std::vector<Held> held;
   for (const GraspSpec& spec : scene->grasps) {
     Rod& rod = world.rod(spec.rod);
     const Eigen::Isometry3d holder = segment_pose(rod, grasp_segment(rod, spec));
-    hold(rod, make_grasp(rod, spec, holder), holder);
+    held.push_back({&rod, make_grasp(rod, spec, holder), holder, spec.motion.get()});
+    hold(rod, held.back().grasp, holder);
   }
+  auto move_holders = [&](double t) {
+    for (const Held& g : held) {
+      if (!g.motion) continue;
+      const Motion::Sample s = g.motion->at(t);
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.linear() = s.rotation.toRotationMatrix() * g.start.linear();
+      pose.translation() = g.start.translation() + s.displacement;
+      hold(*g.rod, g.grasp, pose);
+    }
+  };
+  const bool any_output = options.csv || options.reactions || options.energies;
   const Clock::time_point start = Clock::now();
   Clock::time_point last_report = start;
   auto wall = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  auto write = [&] {
-    write_csv_rows(*options.csv, world);
-    if (!*options.csv) r.write_failed = true;
+  auto write = [&](bool reactions) {
+    if (options.csv) write_csv_rows(*options.csv, world);
+    if (options.energies) write_energy_rows(*options.energies, world);
+    if (options.reactions && reactions) write_reaction_rows(*options.reactions, *scene);
+    for (std::ostream* out : {options.csv, options.energies, options.reactions})
+      if (out && !*out) r.write_failed = true;
   };
   r.problem = run_problem(world, options);  // the scene's own start (initial velocities...)
   if (!r.problem.empty()) {
@@ -115,14 +173,15 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
     r.failed_step = 0;
     r.failed_time = world.time();
   }
-  if (options.csv) {
-    write_csv_header(*options.csv);
-    if (r.ok) write();
-  }
+  if (options.csv) write_csv_header(*options.csv);
+  if (options.energies) write_energy_header(*options.energies);
+  if (options.reactions) write_reaction_header(*options.reactions);
+  if (any_output && r.ok) write(false);
   for (long i = 1; r.ok && i <= steps && !r.write_failed; ++i) {
+    move_holders(world.time() + h);
     world.step();
     r.steps = i;
-    const bool frame = options.csv && (i % r.every == 0 || i == steps);
+    const bool frame = any_output && (i % r.every == 0 || i == steps);
     // Every 8 steps (a blow-up grows over tens of steps; checking every step would cost about 10%
     // of a small rod's step) and before every frame, so that no bad state is written.
     const std::string problem =
@@ -134,7 +193,7 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
       r.failed_time = world.time();
       break;
     }
-    if (frame) write();
+    if (frame) write(true);
     if (options.progress && (i & 255) == 0) {
       const Clock::time_point now = Clock::now();
       if (std::chrono::duration<double>(now - last_report).count() >= options.progress_interval) {

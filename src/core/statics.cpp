@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -23,31 +24,6 @@ Quat exp_half(const Vec3& theta) {
   return Quat(Eigen::AngleAxisd(a, theta / a));
 }
 
-Vec3 drive_position(const NodeDrive& d, double t) {
-  switch (d.kind) {
-    case NodeDrive::Kind::kVelocity:
-      return d.origin + std::max(0.0, t - d.t_start) * d.velocity;
-    case NodeDrive::Kind::kTarget:
-      return d.target;
-    case NodeDrive::Kind::kFixed:
-      break;
-  }
-  return d.origin;
-}
-
-Quat drive_orientation(const SegmentDrive& d, double t) {
-  switch (d.kind) {
-    case SegmentDrive::Kind::kSpin:
-      return d.origin *
-             Quat(Eigen::AngleAxisd(d.rate * std::max(0.0, t - d.t_start), Vec3::UnitZ()));
-    case SegmentDrive::Kind::kTarget:
-      return d.target.normalized();
-    case SegmentDrive::Kind::kFixed:
-      break;
-  }
-  return d.origin;
-}
-
 // The unknowns of one rod and the energy, residual and Hessian as functions of them. The rod's
 // loads are taken out while it lives (its force computation then holds only internal forces and
 // gravity) and added back here with the continuation factor.
@@ -55,6 +31,17 @@ class Problem {
  public:
   Problem(Rod& rod, const Vec3& gravity, double t, const StaticOptions& options)
       : rod_(rod), gravity_(gravity), t_(t), opt_(options) {
+    // Follower loads have no potential and sliding constraints are not among the unknowns here.
+    for (const Load& l : rod_.loads())
+      if (l.follower)
+        throw std::invalid_argument("statics: rod '" + rod_.name() +
+                                    "' has a follower load, which has no potential energy");
+    if (!rod_.node_constraints().empty() || !rod_.segment_constraints().empty())
+      throw std::invalid_argument("statics: rod '" + rod_.name() +
+                                  "' has line, plane or axis constraints, which statics does "
+                                  "not handle");
+    for (GhostFrame* g : {&rod_.ghost_start(), &rod_.ghost_end()})
+      if (g->active) g->frame = ghost_frame_at(*g, t);
     std::swap(loads_, rod_.loads());
     const int n = rod_.num_segments();
     for (double l : rod_.rest_lengths()) length_ += l;

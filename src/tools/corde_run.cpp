@@ -7,6 +7,8 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "corde_sim/scene.h"
@@ -16,12 +18,17 @@ namespace {
 
 const char* kUsage =
     "usage: corde_run SCENE.yaml [--duration S] [--dt H] [--set key.path=value ...]\n"
-    "                 [--out FILE.csv] [--every K] [--max-speed V] [--max-strain E]\n"
+    "                 [--out FILE.csv] [--reactions FILE.csv] [--energies FILE.csv]\n"
+    "                 [--every K] [--max-speed V] [--max-strain E]\n"
     "                 [--max-energy J] [--max-steps N] [--quiet]\n"
     "  --duration S   simulated time (s), overrides the scene's duration\n"
     "  --dt H         time step (s), overrides the scene's time_step\n"
     "  --set K=V      override a scene key, e.g. --set rods.0.elements=100 (repeatable)\n"
     "  --out FILE     write t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw rows as CSV\n"
+    "  --reactions F  write t,support,rod,fx,fy,fz,mx,my,mz,px,py,pz rows: the force and\n"
+    "                 moment each clamp, driven item and grasp exerts on its rod (about p)\n"
+    "  --energies F   write t,rod,kinetic_translation,kinetic_rotation,stretch,bend_twist,\n"
+    "                 coupling,gravity,total rows (J)\n"
     "  --every K      CSV rows every K steps (default: every 10 ms of simulated time)\n"
     "  --max-speed V  stop when a node moves faster than V m/s (default 100)\n"
     "  --max-strain E stop when a segment's |axial strain| exceeds E (default 10; 0: off)\n"
@@ -38,7 +45,7 @@ int usage_error(const std::string& msg) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string scene_path, out_path;
+  std::string scene_path, out_path, reactions_path, energies_path;
   std::vector<std::string> overrides;
   int every = 0;
   bool quiet = false;
@@ -69,7 +76,8 @@ int main(int argc, char** argv) {
       if (a == "--max-strain") options.max_strain = x;
       if (a == "--max-energy") options.max_specific_energy = x;
       if (a == "--max-steps") options.max_steps = x;
-    } else if (a == "--duration" || a == "--dt" || a == "--set" || a == "--out" || a == "--every") {
+    } else if (a == "--duration" || a == "--dt" || a == "--set" || a == "--out" || a == "--every" ||
+               a == "--reactions" || a == "--energies") {
       if (!value(&v)) return usage_error(a + " needs a value");
       if (a == "--duration") overrides.push_back("duration=" + v);
       if (a == "--dt") overrides.push_back("time_step=" + v);
@@ -78,6 +86,8 @@ int main(int argc, char** argv) {
         overrides.push_back(v);
       }
       if (a == "--out") out_path = v;
+      if (a == "--reactions") reactions_path = v;
+      if (a == "--energies") energies_path = v;
       if (a == "--every") {
         char* end = nullptr;
         const long k = std::strtol(v.c_str(), &end, 10);
@@ -110,15 +120,19 @@ int main(int argc, char** argv) {
     for (const std::string& w : scene.warnings)
       std::fprintf(stderr, "corde_run: warning: %s\n", w.c_str());
 
-  std::ofstream csv;
+  std::ofstream csv, reactions, energies;
   options.every = every;
-  if (!out_path.empty()) {
-    csv.open(out_path);
-    if (!csv) {
-      std::fprintf(stderr, "corde_run: cannot write '%s'\n", out_path.c_str());
+  for (auto [path, stream, slot] :
+       {std::make_tuple(&out_path, &csv, &options.csv),
+        std::make_tuple(&reactions_path, &reactions, &options.reactions),
+        std::make_tuple(&energies_path, &energies, &options.energies)}) {
+    if (path->empty()) continue;
+    stream->open(*path);
+    if (!*stream) {
+      std::fprintf(stderr, "corde_run: cannot write '%s'\n", path->c_str());
       return 1;
     }
-    options.csv = &csv;
+    *slot = stream;
   }
   const bool terminal = !quiet && isatty(STDERR_FILENO);
   bool progress_shown = false;
@@ -141,13 +155,18 @@ int main(int argc, char** argv) {
   }
   if (progress_shown) std::fprintf(stderr, "\r\033[K");
   bool write_failed = result.write_failed;
-  if (csv.is_open()) {
-    csv.close();
-    write_failed = write_failed || !csv;
+  std::string failed_path;
+  for (auto [path, stream] :
+       {std::make_pair(&out_path, &csv), std::make_pair(&reactions_path, &reactions),
+        std::make_pair(&energies_path, &energies)}) {
+    if (!stream->is_open()) continue;
+    stream->close();
+    if (!*stream && failed_path.empty()) failed_path = *path;
+    write_failed = write_failed || !*stream;
   }
   if (!quiet) std::printf("%s", corde::run_summary(scene, result).c_str());
   if (write_failed) {
-    std::fprintf(stderr, "corde_run: error writing '%s' (disk full?)%s\n", out_path.c_str(),
+    std::fprintf(stderr, "corde_run: error writing '%s' (disk full?)%s\n", failed_path.c_str(),
                  result.write_failed ? "; the run stopped there" : "");
     return 1;
   }
@@ -156,7 +175,9 @@ int main(int argc, char** argv) {
                  "corde_run: the run blew up at step %ld (t = %.6g s): %s%s; try a smaller time "
                  "step (--dt)\n",
                  result.failed_step, result.failed_time, result.problem.c_str(),
-                 out_path.empty() ? "" : "; the CSV ends with the last frame before it");
+                 out_path.empty() && reactions_path.empty() && energies_path.empty()
+                     ? ""
+                     : "; the CSV files end with the last frame before it");
     return 3;
   }
   return 0;
