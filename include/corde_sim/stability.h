@@ -12,11 +12,13 @@
 //    docs/model.md lists separately (bending through the frames, bending of the centreline, the
 //    penalty modes); their 2x2 continuum estimate misses modes at free ends that are up to ~8%
 //    higher.
-// The internal friction of the top mode (gamma_t on stretch, gamma_r on twist and tilt) is taken
-// as modal damping c, and a damped mode of semi-implicit Euler (friction from the old velocity)
-// is stable while h^2 omega^2 + 2 h c < 4, so h = (sqrt(c^2 + 4 omega^2) - c) / omega^2, which is
-// 2/omega undamped. Kelvin-Voigt friction makes c grow like omega^2 tau: a long retardation time
-// tau shrinks the step to about 2/(omega^2 tau). The smallest step of the three families wins.
+// Internal friction (gamma_t on stretch, gamma_r on twist and tilt, from the old velocity) enters
+// as the family's mass-scaled friction matrix D: semi-implicit Euler is stable while
+// h^2 K + 2 h D < 4 I, bisected with Sturm counts. For a mode shared by K and D (omega, modal
+// damping c) that is h^2 omega^2 + 2 h c < 4, h = (sqrt(c^2 + 4 omega^2) - c) / omega^2, 2/omega
+// undamped; Kelvin-Voigt friction (c ~ omega^2 tau) shrinks it to about 2/(omega^2 tau). The
+// friction need not damp K's top mode: gamma_r on the tilts (half the twist's inertia) can limit
+// while K's top bending-shear mode moves the nodes. The smallest step of the three families wins.
 #pragma once
 
 #include <string>

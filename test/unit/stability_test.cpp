@@ -14,9 +14,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ostream>
 #include <random>
 
 #include "corde_sim/rod_shape.h"
+#include "validation_util.h"
 
 namespace corde {
 namespace {
@@ -30,6 +32,18 @@ struct Case {
   bool clamped;                // ghost clamp at the start, node fixed at the end
   double stretch_scale = 1.0;  // E_s = scale * E (braided ropes: E_s >> E)
 };
+
+// Random perturbation of 1e-6 on every degree of freedom, so that every mode starts excited.
+void perturb(Rod* rod) {
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
+  auto rnd = [&] { return Vec3(u(gen), u(gen), u(gen)); };
+  for (auto& x : rod->positions()) x += rnd();
+  for (auto& v : rod->velocities()) v = rnd();
+  for (auto& q : rod->orientations())
+    q = (q * Quat(Eigen::AngleAxisd(1e-6, rnd().normalized()))).normalized();
+  for (auto& w : rod->angular_velocities()) w = rnd();
+}
 
 // The example rod of docs/validation_references.md: L = 1, r = 1 cm, rho = 1000,
 // E = E_s = 1e7, G = E/3.
@@ -56,15 +70,7 @@ Rod make_rod(const Case& c) {
     rod.ghost_start().active = true;
     rod.ghost_start().frame = rod.orientations()[0];
   }
-  // Random perturbation of 1e-6 on every degree of freedom.
-  std::mt19937 gen(7);
-  std::uniform_real_distribution<double> u(-1e-6, 1e-6);
-  auto rnd = [&] { return Vec3(u(gen), u(gen), u(gen)); };
-  for (auto& x : rod.positions()) x += rnd();
-  for (auto& v : rod.velocities()) v = rnd();
-  for (auto& q : rod.orientations())
-    q = (q * Quat(Eigen::AngleAxisd(1e-6, rnd().normalized()))).normalized();
-  for (auto& w : rod.angular_velocities()) w = rnd();
+  perturb(&rod);
   return rod;
 }
 
@@ -172,6 +178,186 @@ INSTANTIATE_TEST_SUITE_P(
                       Case{40, 1.0, 0.0, false}, Case{80, 1.0, 0.0, false},
                       Case{20, 10.0, 0.0, false},         // coupling penalty dominates
                       Case{40, 1.0, 0.0, false, 10.0}));  // stretch dominates (E_s = 10 E)
+
+// Strong internal friction, each case near critical damping of its family's first mode, relaxing
+// from a perturbed state (the issue: `time_step: auto` blew up on a cantilever with bending
+// friction near critical damping). The friction-limited steps are far below the undamped ones,
+// and the limiting vector need not be the stiffness's top mode: with elements shorter than the
+// radius and a stiff penalty, K's top bending-shear mode moves the nodes, while the friction acts
+// on the tilts (inertia I_z/2, half the twist's), so modal damping of K's top mode misses it.
+struct FrictionCase {
+  const char* name;
+  Rod (*make)();
+  Vec3 gravity;
+  const char* limiting;  // family the estimate must name
+};
+
+void PrintTo(const FrictionCase& c, std::ostream* os) { *os << c.name; }
+
+const Vec3 kGravity(0.0, 0.0, -9.81);
+
+// A straight rod along x, d1 = z.
+Rod straight_rod(const Material& m, double radius, double length, int elements) {
+  RodSpec spec;
+  spec.elements = elements;
+  spec.shape.length = length;
+  spec.shape.direction = Vec3::UnitX();
+  spec.shape.reference_d1 = Vec3::UnitZ();
+  spec.section = make_section(m, radius);
+  return build_rod(spec);
+}
+
+void fix_node(Rod* rod, int node) {
+  NodeDrive fix;
+  fix.node = node;
+  fix.origin = rod->positions()[node];
+  rod->add_node_drive(fix);
+}
+
+// The default scene's cable (soft_cable, E_s = 50 MPa, r = 3 mm) as a cantilever: node 0 fixed,
+// ghost clamp, straight, sagging under gravity. gamma_r damps the first bending mode critically
+// (Kelvin-Voigt gives it the damping ratio gamma_r omega_1 / (2B); omega_1 = 1.8751^2
+// sqrt(B / (rho A)) / L^2).
+Rod cable_cantilever(double length, int elements, double kappa) {
+  Material m = material_preset("soft_cable").material;
+  m.stretch_modulus = 5e7;
+  m.kappa = kappa;
+  const Section s = make_section(m, 0.003);
+  const double omega1 = 1.8751 * 1.8751 * std::sqrt(s.bend / s.mass_per_length) / (length * length);
+  m.gamma_r = 2.0 * s.bend / omega1;
+  Rod rod = straight_rod(m, 0.003, length, elements);
+  fix_node(&rod, 0);
+  rod.ghost_start().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  perturb(&rod);
+  return rod;
+}
+// As in the default scene: 1 m, 40 elements, kappa = 60 N (0.2 G A).
+Rod cable_cantilever_scene() { return cable_cantilever(1.0, 40, 60.0); }
+// A 10 cm stub with 40 elements (2.5 mm, below the radius) and a stiff penalty (20 G A).
+Rod cable_cantilever_stub() {
+  const double g = material_preset("soft_cable").material.shear_modulus;
+  return cable_cantilever(0.1, 40, 20.0 * g * kPi * 0.003 * 0.003);
+}
+
+// The example rod hanging from a fixed node, gamma_t critical for its first axial mode
+// (omega_1 = pi c / (2L), damping ratio gamma_t omega_1 / (2 K_s)); no rotational friction.
+Rod hanging_stretch_friction() {
+  Material m = val::example_material();
+  const Section s = make_section(m, 0.01);
+  const double omega1 = 0.5 * kPi * std::sqrt(s.stretch / s.mass_per_length);
+  m.gamma_t = 2.0 * s.stretch / omega1;
+  RodSpec spec;
+  spec.elements = 20;
+  spec.shape.direction = -Vec3::UnitZ();
+  spec.shape.reference_d1 = Vec3::UnitX();
+  spec.section = make_section(m, 0.01);
+  Rod rod = build_rod(spec);
+  fix_node(&rod, 0);
+  perturb(&rod);
+  return rod;
+}
+
+// The example rod (20 elements) clamped at both ends (fixed nodes, ghost frames), twisted by
+// 1 rad and let go; gamma_r critical for its first twist mode (omega_1 = pi c_s / L, damping
+// ratio gamma_r omega_1 / (2C)). The same gamma_r acts on the tilts, which then limit.
+Rod twisted_rod(double length, double kappa_scale, bool heavy_tilts) {
+  Material m = val::example_material();
+  m.kappa *= kappa_scale;
+  const Section s = make_section(m, 0.01);
+  const double omega1 = kPi * std::sqrt(s.twist / s.inertia_twist) / length;
+  m.gamma_r = 2.0 * s.twist / omega1;
+  const int n = 20;
+  Rod rod = straight_rod(m, 0.01, length, n);
+  fix_node(&rod, 0);
+  fix_node(&rod, n);
+  rod.ghost_start().active = rod.ghost_end().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  rod.ghost_end().frame = rod.orientations()[n - 1];
+  for (int j = 0; j < n; ++j)
+    rod.orientations()[j] *= Quat(Eigen::AngleAxisd((j + 0.5) / n, Vec3::UnitZ()));
+  if (heavy_tilts) {  // bending inertia 2x the twist's instead of 1/2: the twist family limits
+    Section sec = rod.section();
+    sec.inertia_bend *= 4.0;
+    rod.set_section(sec);
+  }
+  perturb(&rod);
+  return rod;
+}
+Rod twisted_rod_long() { return twisted_rod(1.0, 1.0, false); }
+// 10 cm (elements of 5 mm, half the radius) and a stiff penalty (10 G A).
+Rod twisted_rod_stub() { return twisted_rod(0.1, 10.0, false); }
+Rod twisted_rod_heavy_tilts() { return twisted_rod(1.0, 1.0, true); }
+
+// Unstable if within 4000 steps the elastic plus kinetic energy exceeds 1e6 times what a stable
+// run can hold: its initial value plus the work gravity can do in that time (the nodes fall no
+// faster than freely; friction only takes energy out). A mode 1% beyond the edge grows by about
+// 2% per step and passes the bound within a few hundred steps.
+bool blows_up(const FrictionCase& c, double h) {
+  Rod rod = c.make();
+  const int steps = 4000;
+  double mass = 0.0;
+  for (double m : rod.node_masses()) mass += m;
+  const Energies e0 = rod.energies(c.gravity);
+  const double t = steps * h;
+  const double bound =
+      1e6 * (e0.elastic() + e0.kinetic() + 0.5 * mass * c.gravity.squaredNorm() * t * t);
+  for (int i = 0; i < steps; ++i) {
+    rod.step(i * h, h, c.gravity);
+    if ((i + 1) % 10 != 0) continue;
+    const Energies e = rod.energies(c.gravity);
+    if (!(e.elastic() + e.kinetic() <= bound)) return true;  // also catches NaN
+  }
+  return false;
+}
+
+class StabilityFriction : public ::testing::TestWithParam<FrictionCase> {};
+
+// The edge is bisected geometrically inside [0.25, 2] x the estimate (8 times: 0.8% resolution).
+// Before the fix (modal damping of K's top mode) the stubs measured 0.49 (cable) and 0.48
+// (twisted) of the estimate, which named twist; now all are 0.999 .. 1.007.
+TEST_P(StabilityFriction, MeasuredEdgeOverEstimateInRange) {
+  const FrictionCase c = GetParam();
+  const StabilityEstimate est = estimate_stability(c.make());
+  const double pred = est.time_step;
+  double lo = 0.25 * pred, hi = 2.0 * pred;
+  ASSERT_FALSE(blows_up(c, lo));
+  ASSERT_TRUE(blows_up(c, hi));
+  for (int it = 0; it < 8; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    (blows_up(c, mid) ? hi : lo) = mid;
+  }
+  const double measured = std::sqrt(lo * hi);
+  std::printf(
+      "%s: measured %.4e s, estimate %.4e s (%s; stretch %.3e, twist %.3e, bending-shear "
+      "%.3e), ratio %.3f\n",
+      c.name, measured, pred, est.limiting.c_str(), est.stretch, est.twist, est.bending,
+      measured / pred);
+  EXPECT_EQ(est.limiting, c.limiting);
+  EXPECT_GE(measured / pred, 0.7);
+  EXPECT_LE(measured / pred, 1.05);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rods, StabilityFriction,
+    ::testing::Values(
+        FrictionCase{"CableCantilever", cable_cantilever_scene, kGravity, "bending-shear"},
+        FrictionCase{"CableCantileverStub", cable_cantilever_stub, kGravity, "bending-shear"},
+        FrictionCase{"HangingStretch", hanging_stretch_friction, kGravity, "stretch"},
+        FrictionCase{"TwistedRod", twisted_rod_long, Vec3::Zero(), "bending-shear"},
+        FrictionCase{"TwistedRodStub", twisted_rod_stub, Vec3::Zero(), "bending-shear"},
+        FrictionCase{"TwistedRodHeavyTilts", twisted_rod_heavy_tilts, Vec3::Zero(), "twist"}),
+    [](const ::testing::TestParamInfo<FrictionCase>& info) { return info.param.name; });
+
+// With friction far above the stiffness, a family's step is 2 / lambda_max(M^-1 D). The tilts
+// have the twist's friction and half its inertia, so bending-shear allows half the twist's step,
+// also where K's top bending-shear mode moves the nodes (the stub; before the fix: 1.08).
+TEST(Stability, TiltFrictionHalvesTwistStep) {
+  for (Rod (*make)() : {cable_cantilever_scene, cable_cantilever_stub}) {
+    const StabilityEstimate est = estimate_stability(make());
+    EXPECT_NEAR(est.bending / est.twist, 0.5, 0.01);
+  }
+}
 
 TEST(Stability, ContinuumLimitsForLongElements) {
   // With l >> r and a soft penalty the families approach the continuum formulas of docs/model.md:
