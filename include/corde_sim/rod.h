@@ -100,8 +100,13 @@ class Rod {
   const std::vector<Vec3>& forces() const { return f_; }
   const std::vector<Vec3>& torques() const { return tau_; }
 
-  // One semi-implicit Euler step (eqs. 37-42) from t to t + h. Allocates nothing.
+  // One semi-implicit Euler step (eqs. 37-42) from t to t + h. Allocates nothing. Each drive,
+  // constraint and ghost frame records the reaction it exerted over the step (boundary.h).
   void step(double t, double h, const Vec3& gravity);
+  // The reactions of an equilibrium (after solve_statics): at rest, each support takes what the
+  // rest of the rod, gravity and the loads exert on its items at time t: -f, -tau, and for
+  // constraints the part of -f across the line or plane (about the axis only the rest is held).
+  void set_static_reactions(double t, const Vec3& gravity);
 
   Energies energies(const Vec3& gravity) const;
   Vec3 center_of_mass() const;

@@ -41,6 +41,14 @@ std::string GraspSet::check(const World& world, const GraspSpec& spec, int* rod_
       return "node " + std::to_string(node) + " of segment " + std::to_string(seg) + " of rod '" +
              spec.rod + "' has a boundary condition";
   }
+  for (const NodeConstraint& c : rod.node_constraints())
+    if (c.node == seg || c.node == seg + 1)
+      return "node " + std::to_string(c.node) + " of segment " + std::to_string(seg) + " of rod '" +
+             spec.rod + "' slides on a line or plane (a boundary condition)";
+  for (const SegmentConstraint& c : rod.segment_constraints())
+    if (spec.hold_orientation && c.segment == seg)
+      return "segment " + std::to_string(seg) + " of rod '" + spec.rod +
+             "' has a hinge (a boundary condition)";
   const SegmentDrive* sd = rod.segment_drive(seg);
   if (spec.hold_orientation && sd && sd->kind != SegmentDrive::Kind::kTarget)
     return "segment " + std::to_string(seg) + " of rod '" + spec.rod + "' has a boundary condition";

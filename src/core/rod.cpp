@@ -99,6 +99,10 @@ void Rod::set_rest_strains_from_state() {
 void Rod::add_node_drive(const NodeDrive& d) {
   if (d.node < 0 || d.node >= num_nodes())
     throw std::out_of_range("rod '" + name_ + "': no node " + std::to_string(d.node));
+  for (const NodeConstraint& c : node_constraints_)
+    if (c.node == d.node)
+      throw std::invalid_argument("rod '" + name_ + "': node " + std::to_string(d.node) +
+                                  " slides on a line or plane; it cannot also be driven");
   remove_node_drive(d.node);
   node_drives_.push_back(d);
   node_free_[d.node] = 0.0;
@@ -115,6 +119,10 @@ void Rod::add_load(const Load& l) {
 void Rod::add_segment_drive(const SegmentDrive& d) {
   if (d.segment < 0 || d.segment >= num_segments())
     throw std::out_of_range("rod '" + name_ + "': no segment " + std::to_string(d.segment));
+  for (const SegmentConstraint& c : segment_constraints_)
+    if (c.segment == d.segment)
+      throw std::invalid_argument("rod '" + name_ + "': segment " + std::to_string(d.segment) +
+                                  " has a hinge; it cannot also be driven");
   remove_segment_drive(d.segment);
   segment_drives_.push_back(d);
   seg_free_[d.segment] = 0.0;
@@ -626,6 +634,22 @@ void Rod::apply_drives(double t_end, double h) {
   }
   for (GhostFrame& g : ghost_)
     if (g.active && g.motion) g.frame = ghost_frame_at(g, t_end);
+}
+
+void Rod::set_static_reactions(double t, const Vec3& gravity) {
+  compute_forces(t, gravity);  // also records the ghost frames' torques
+  for (NodeDrive& d : node_drives_) d.reaction = -f_[d.node];
+  for (SegmentDrive& d : segment_drives_) d.reaction = -(q_[d.segment] * tau_[d.segment]);
+  for (NodeConstraint& c : node_constraints_) {
+    const Vec3& a = c.direction;
+    const Vec3 f = -f_[c.node];
+    c.reaction =
+        c.kind == NodeConstraint::Kind::kLine ? Vec3(f - a * a.dot(f)) : Vec3(a * a.dot(f));
+  }
+  for (SegmentConstraint& c : segment_constraints_) {
+    const Vec3 tau = -(q_[c.segment] * tau_[c.segment]);
+    c.reaction = tau - c.axis * c.axis.dot(tau);
+  }
 }
 
 Energies Rod::energies(const Vec3& gravity) const {

@@ -316,6 +316,16 @@ class Problem {
     }
     for (int s = 0; s < rod_.num_segments(); ++s)
       if (count_[2 * s + 1] == 0) rod_.orientations()[s] = qs[s].slerp(lambda, qt[s]).normalized();
+    // Keyframed drives and moving clamps follow their motion from time 0 to t through the load
+    // steps instead: a straight slerp would lose every whole turn of a twisted end.
+    for (const NodeDrive& d : rod_.node_drives())
+      if (d.kind == NodeDrive::Kind::kMotion)
+        rod_.positions()[d.node] = drive_position(d, lambda * t_);
+    for (const SegmentDrive& d : rod_.segment_drives())
+      if (d.kind == SegmentDrive::Kind::kMotion)
+        rod_.orientations()[d.segment] = drive_orientation(d, lambda * t_);
+    for (GhostFrame* g : {&rod_.ghost_start(), &rod_.ghost_end()})
+      if (g->active && g->motion) g->frame = ghost_frame_at(*g, lambda * t_);
   }
 
  private:
