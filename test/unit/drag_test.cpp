@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "corde_sim/rod_shape.h"
+#include "corde_sim/scene.h"
 #include "corde_sim/world.h"
 
 namespace corde {
@@ -62,6 +64,43 @@ TEST(Drag, TerminalVelocities) {
     const Vec3 v = velocity_after(&w, 4.0);  // 25 time constants mu / c_t
     EXPECT_NEAR(v.z(), -mu * g / d.linear_tangential, 1e-9);
     EXPECT_LT(v.head<2>().norm(), 1e-12);
+  }
+}
+
+// A body in air reaches its terminal velocity: a free straight rod falling broadside, built from a
+// scene (drag from the air's density and the cylinder's drag coefficient, or a linear
+// coefficient), whose centre of mass falls at sqrt(m g / (q_n L)) or m g / (c_n L).
+TEST(Drag, SceneRodFallingBroadsideReachesTerminalVelocity) {
+  const std::string rod_text =
+      "gravity: [0, 0, -9.81]\n"
+      "time_step: auto\n"
+      "rods:\n"
+      "  - elements: 10\n"
+      "    radius: 0.005\n"
+      "    material: {E: 1.0e7, nu: 0.5, rho: 1000}\n"
+      "    shape: {type: straight, direction: [1, 0, 0], length: 0.5}\n";
+  const double m = 1000.0 * kPi * 0.005 * 0.005 * 0.5, L = 0.5, g = 9.81;
+  struct Case {
+    const char* drag;
+    double terminal, seconds;
+  } cases[] = {
+      // q_n = rho_air C_d r = 1.2 * 1.2 * 0.005: v = 10.4 m/s, time constant v / g = 1.06 s.
+      {"    drag: {fluid_density: 1.2, drag_coefficient: 1.2}\n",
+       std::sqrt(m * g / (1.2 * 1.2 * 0.005 * L)), 6.0},
+      // c_n = 0.5 N s/m^2: v = 1.54 m/s, time constant m / (c_n L) = 0.16 s.
+      {"    drag: {linear_normal: 0.5}\n", m * g / (0.5 * L), 2.0},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.drag);
+    Scene s = parse_scene(rod_text + c.drag);
+    const Rod& rod = s.world.rods()[0];
+    double mass = 0.0;
+    for (double mi : rod.node_masses()) mass += mi;
+    EXPECT_NEAR(mass, m, 1e-12);
+    s.world.step(static_cast<int>(std::ceil(c.seconds / s.world.time_step)));
+    const Vec3 v = rod.linear_momentum() / mass;  // velocity of the centre of mass
+    EXPECT_NEAR(v.z(), -c.terminal, 0.01 * c.terminal);
+    EXPECT_LT(v.head<2>().norm(), 1e-6 * c.terminal);
   }
 }
 
