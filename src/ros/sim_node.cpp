@@ -152,8 +152,12 @@ long SimNode::run_steps(long n, double deadline) {
   const double c0 = thread_cpu_seconds();
   long k = 0;
   const bool grasps = !grasps_.empty();
+  scripted_.clear();  // keeps its capacity
+  for (const auto& kv : wiring_)
+    if (kv.second.script) scripted_.emplace_back(&kv.first, &kv.second);
   for (; k < n; ++k) {
     if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
+    if (!scripted_.empty()) drive_scripted(world_.time(), h);
     if (grasps) grasps_.before_step(world_, world_.time(), h);
     world_.step();
     if (grasps) grasps_.after_step(world_, h);

@@ -81,6 +81,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
   for (auto it = wiring_.begin(); it != wiring_.end();) {
     const bool kept = std::any_of(scene.grasps.begin(), scene.grasps.end(),
                                   [&](const corde::GraspSpec& g) { return g.name == it->first; });
+    if (kept) it->second.script.reset();  // add_grasp starts it again from the new scene
     it = kept ? std::next(it) : wiring_.erase(it);
   }
   inputs_.clear();
@@ -125,7 +126,8 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   if (p != params_.grasps.end()) param = p->second;
   // Without a frame to follow, the holder starts where the offset puts it relative to the segment
   // (the segment itself when no offset is given): nothing moves.
-  Eigen::Isometry3d holder = corde::segment_pose(world_.rods()[rod], seg);
+  const Eigen::Isometry3d segment_start = corde::segment_pose(world_.rods()[rod], seg);
+  Eigen::Isometry3d holder = segment_start;
   if (param.has_offset) holder = holder * param.offset.inverse();
   const Eigen::Isometry3d* offset = nullptr;
   bool attached = true;
@@ -157,9 +159,49 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   w.offset = param.offset;
   w.snap = param.snap;
   w.last_input_time = -1.0;
+  w.script.reset();
+  if (from_scene && spec.motion) {
+    if (source == GraspSource::kTf && attached) {
+      // Its frame is there already: an input, which wins over the keyframes.
+      ROS_INFO(
+          "corde_sim: grasp '%s' follows tf frame '%s' from the start: its scene keyframes are "
+          "not used",
+          spec.name.c_str(), frame.c_str());
+    } else {
+      w.script = spec.motion;
+      w.script_start = segment_start;
+      w.script_offset_inv = grasps_.find(spec.name)->grasp.offset.inverse();
+      ROS_INFO(
+          "corde_sim: grasp '%s' follows its scene keyframes (to t = %g s, then holds the last) "
+          "until an input for it arrives",
+          spec.name.c_str(), spec.motion->end_time());
+    }
+  }
   wire_grasp(spec.name, &w);
   *segment = seg;
   return "";
+}
+
+void SimNode::drive_scripted(double t, double h) {
+  for (const auto& s : scripted_) {
+    const GraspWiring& w = *s.second;
+    // Past the last keyframe the goal stays where the last call put it: the holder settles there
+    // and costs nothing more.
+    if (t >= w.script->end_time()) continue;
+    const corde::Motion::Sample m = w.script->at(t + h);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = m.rotation.toRotationMatrix() * w.script_start.linear();
+    pose.translation() = w.script_start.translation() + m.displacement;
+    grasps_.set_goal(*s.first, t, pose * w.script_offset_inv, h);
+  }
+}
+
+void SimNode::end_script(const std::string& name, const char* what) {
+  auto w = wiring_.find(name);
+  if (w == wiring_.end() || !w->second.script) return;
+  w->second.script.reset();
+  ROS_INFO("corde_sim: grasp '%s' %s: its scene keyframes no longer move it (t = %.3f s)",
+           name.c_str(), what, sim_time());
 }
 
 void SimNode::wire_grasp(const std::string& name, GraspWiring* w) {
@@ -343,6 +385,7 @@ void SimNode::update_tf_holders() {
                         w.frame.c_str(), error.c_str());
       continue;
     }
+    if (w.script) end_script(kv.first, ("follows tf frame '" + w.frame + "' from now on").c_str());
     if (!w.attached) {
       grasps_.attach(world_, kv.first, f, w.snap ? &w.offset : nullptr, world_.time());
       w.attached = true;
@@ -453,6 +496,7 @@ void SimNode::apply_inputs() {
         const double interval =
             last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
         last = e.input_time;
+        if (w->second.script) end_script(e.grasp, "follows its pose input from now on");
         grasps_.set_goal(e.grasp, world_.time(), e.pose, interval);
         break;
       }
@@ -502,6 +546,7 @@ void SimNode::check_holders_and_strain() {
         nearest = kv.first;
       }
     if (!nearest.empty() && grasps_.release(world_, nearest)) {
+      end_script(nearest, "slipped");
       ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
                strain_warning_.c_str());
       refresh_layout();

@@ -229,6 +229,7 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
     return true;
   }
   grasps_.release(world_, req.name);
+  end_script(req.name, "was released (~release)");
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
   ROS_INFO("corde_sim: %s", res.message.c_str());
@@ -245,7 +246,10 @@ bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
     res.rods.push_back(g.grasp.rod);
     res.segments.push_back(g.grasp.segment);
     res.arc_lengths.push_back(g.arc_length);
-    res.sources.push_back(w == wiring_.end() ? "" : to_string(w->second.source));
+    // "scripted" while the scene's keyframes move the holder (until an input for the grasp).
+    res.sources.push_back(w == wiring_.end() ? ""
+                          : w->second.script ? "scripted"
+                                             : to_string(w->second.source));
     res.frames.push_back(w == wiring_.end() ? "" : w->second.frame);
     res.held.push_back(g.held);
     const Eigen::Isometry3d h = g.holder_pose();

@@ -21,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "corde_sim/Configure.h"
@@ -55,6 +56,14 @@ struct GraspWiring {
   bool snap = false;
   int marker_id = 0;
   double last_input_time = -1.0;  // ROS time of the last pose input (s), for its interval
+  // A scene grasp with keyframes (GraspSpec::motion) is "scripted": its holder follows them in
+  // world time (World::time()) until the grasp's first input (a pose, its tf frame, ~release);
+  // null otherwise. The keyframes move the held segment's pose from `script_start` (its pose
+  // when the grasp was made), as corde_run does; the holder is that pose times
+  // `script_offset_inv` (the inverse of the grasp's offset then).
+  std::shared_ptr<const corde::Motion> script;
+  Eigen::Isometry3d script_start = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d script_offset_inv = Eigen::Isometry3d::Identity();
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
   ros::Publisher reaction_pub;
 };
@@ -88,6 +97,12 @@ class SimNode {
                         bool from_scene, int* segment);
   void wire_grasp(const std::string& name, GraspWiring* w);
   void update_tf_holders();
+  // Scripted grasps: sets each holder's goal to the keyframes' pose at t + h, reached at t + h
+  // (the holder limits still apply). Allocates nothing.
+  void drive_scripted(double t, double h);
+  // An input for grasp `name` arrived, or it was let go (`what`: "grasp '<name>' <what>"): its
+  // keyframes stop moving it (logged once, at INFO).
+  void end_script(const std::string& name, const char* what);
   void refresh_layout();
   void apply_inputs();
   void check_holders_and_strain();
@@ -144,6 +159,7 @@ class SimNode {
   corde::World world_;
   corde::GraspSet grasps_;
   std::map<std::string, GraspWiring> wiring_;
+  std::vector<std::pair<const std::string*, const GraspWiring*>> scripted_;  // run_steps' list
   InputQueue inputs_;
   Snapshot last_good_;  // taken at publishes of a valid state; restored if it turns invalid
   corde::ValidityLimits validity_;
