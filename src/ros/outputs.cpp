@@ -229,12 +229,13 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
       }
       out->markers.push_back(std::move(m));
     }
-    // Clamps: every fixed node and every ghost-clamped end (a ghost clamp also fixes its node,
+    // Clamps: every fixed or keyframed node and every ghost-clamped end (a ghost clamp also fixes its node,
     // so each node is drawn once), oriented with the ghost frame or the adjacent segment (frozen
     // too for a natural clamp). A flat box shows the clamp's d1/d2 axes, unlike a disc.
     clamped.clear();
     for (const corde::NodeDrive& d : rod.node_drives())
-      if (d.kind == corde::NodeDrive::Kind::kFixed) clamped.push_back(d.node);
+      if (d.kind == corde::NodeDrive::Kind::kFixed || d.kind == corde::NodeDrive::Kind::kMotion)
+        clamped.push_back(d.node);
     if (rod.ghost_start().active) clamped.push_back(0);
     if (rod.ghost_end().active) clamped.push_back(n);
     std::sort(clamped.begin(), clamped.end());
