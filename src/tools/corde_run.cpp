@@ -33,7 +33,7 @@ const char* kUsage =
     "  --max-speed V  stop when a node moves faster than V m/s (default 100)\n"
     "  --max-strain E stop when a segment's |axial strain| exceeds E (default 10; 0: off)\n"
     "  --max-energy J stop when a rod's (kinetic + elastic energy) / mass exceeds J J/kg\n"
-    "                 (default 1e4; 0: off)\n"
+    "                 (default 1e5; 0: off)\n"
     "  --max-steps N  refuse runs of more than N steps (default 1e9)\n"
     "  --quiet        print only errors\n";
 

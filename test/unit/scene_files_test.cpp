@@ -32,7 +32,8 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
   for (const std::string& f : scene_files())
     names.push_back(std::filesystem::path(f).stem().string());
   for (const char* want : {"default", "coiling_50", "coiling_100", "coiling_1000",
-                           "preshaped_spring", "preshaped_wire", "thread"})
+                           "preshaped_spring", "preshaped_wire", "thread", "helical_buckling",
+                           "plectoneme", "lift_and_lay", "rope_pendulum_air"})
     EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
 }
 
