@@ -1,5 +1,6 @@
 #include "corde_sim/motion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -91,16 +92,17 @@ Motion::Sample Motion::at(double t) const {
   Sample s;
   if (frames_.empty()) return s;
   const size_t n = frames_.size();
-  const Quat turn0 = Quat(Eigen::AngleAxisd(frames_.back().angle, axis_));
   if (!(t > 0.0) || n == 1) return s;
   if (t >= frames_.back().time) {
     const Keyframe& f = frames_.back();
     s.displacement = f.displacement;
-    s.rotation = f.rotation * turn0;
+    s.rotation = f.rotation * Quat(Eigen::AngleAxisd(f.angle, axis_));
     return s;
   }
-  size_t k = 0;  // the interval [k, k + 1] holding t (few keyframes: a linear scan is fine)
-  while (k + 2 < n && t >= frames_[k + 1].time) ++k;
+  // The interval [k, k + 1] holding t: the last keyframe at or before t.
+  const auto after = std::upper_bound(frames_.begin(), frames_.end(), t,
+                                      [](double x, const Keyframe& f) { return x < f.time; });
+  const size_t k = std::min(static_cast<size_t>(after - frames_.begin()) - 1, n - 2);
   const Keyframe &a = frames_[k], &b = frames_[k + 1];
   const double h = b.time - a.time, u = (t - a.time) / h;
   double angle = 0.0, angle_rate = 0.0, profile = u, profile_rate = 1.0 / h;
