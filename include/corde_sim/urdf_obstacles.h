@@ -1,0 +1,40 @@
+// Obstacles from a robot description (URDF): every link's collision elements posed by forward
+// kinematics at given joint values. Meshes are read with assimp.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "corde_sim/obstacle.h"
+
+namespace corde {
+
+// Reads the URDF file at `path`. Each collision element (box, cylinder, sphere, mesh with its
+// scale) becomes one obstacle named "<link>" (or "<link>/<i>", i from 0, when the link has
+// several), posed at the link's pose times the collision origin. Link poses: from the root link
+// at the identity, joints at `joint_values` (radians or metres by joint name; absent joints at 0;
+// revolute and continuous joints rotate about their axis, prismatic ones translate along it;
+// fixed, floating and planar joints stay at their origin; mimic joints are not followed).
+// Obstacles behind a movable joint are marked `moving`.
+//
+// Mesh file names: `package://<pkg>/<path>` is looked up in the folders above the URDF's folder
+// (a folder named <pkg> or holding a package.xml that names <pkg>), then in ROS_PACKAGE_PATH's
+// folders; `file://` and relative names are relative to the URDF's folder.
+//
+// Throws std::runtime_error naming the file and the element (link, collision index, joint) for a
+// URDF that does not parse, a missing or unreadable mesh, a non-positive or non-finite size or
+// scale, or a joint name in `joint_values` the robot lacks.
+std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
+                                          const std::map<std::string, double>& joint_values = {});
+
+// The same from the URDF's text; relative mesh names are resolved against `base_dir`. Messages
+// name the document "<urdf string>".
+std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
+                                           const std::map<std::string, double>& joint_values = {});
+
+// Triangles of a mesh file (STL, DAE, OBJ, ... : what assimp reads), every node's transform
+// applied, then scaled per axis. Throws std::runtime_error naming the file.
+TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale = Vec3::Ones());
+
+}  // namespace corde

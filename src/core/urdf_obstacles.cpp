@@ -1,0 +1,314 @@
+// URDF collision geometry as obstacles: urdfdom parses, forward kinematics poses the links,
+// assimp reads the mesh files.
+#include "corde_sim/urdf_obstacles.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <mutex>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+
+namespace corde {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// urdfdom reports why a document fails through console_bridge only: collect its messages while
+// parsing (the handler is process-wide, hence the lock; the previous one is restored).
+class Collector : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) {
+      if (!text_.empty()) text_ += "; ";
+      text_ += text;
+    }
+  }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+urdf::ModelInterfaceSharedPtr parse(const std::string& xml, const std::string& doc) {
+  static std::mutex mutex;
+  std::lock_guard<std::mutex> lock(mutex);
+  Collector collector;
+  console_bridge::useOutputHandler(&collector);
+  urdf::ModelInterfaceSharedPtr model;
+  std::string error;
+  try {
+    model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  console_bridge::restorePreviousOutputHandler();
+  if (!model) {
+    if (error.empty()) error = collector.text();
+    throw std::runtime_error(doc + ": not a valid URDF" + (error.empty() ? "" : ": " + error));
+  }
+  return model;
+}
+
+Eigen::Isometry3d to_iso(const urdf::Pose& p) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Vec3(p.position.x, p.position.y, p.position.z);
+  Eigen::Quaterniond q(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z);
+  if (q.norm() > 0.0) t.linear() = q.normalized().toRotationMatrix();
+  return t;
+}
+
+// The folder of ROS package `pkg`: above `start` (a folder named pkg or whose package.xml names
+// it), then in ROS_PACKAGE_PATH's folders and their direct subfolders.
+bool package_xml_names(const fs::path& dir, const std::string& pkg) {
+  std::ifstream in(dir / "package.xml");
+  if (!in) return false;
+  std::stringstream text;
+  text << in.rdbuf();
+  static const std::regex name_re("<name>\\s*([^<\\s]+)\\s*</name>");
+  std::smatch m;
+  const std::string s = text.str();
+  return std::regex_search(s, m, name_re) && m[1] == pkg;
+}
+
+fs::path find_package_dir(const std::string& pkg, const fs::path& start) {
+  std::error_code ec;
+  for (fs::path dir = fs::absolute(start, ec); !dir.empty(); dir = dir.parent_path()) {
+    if (dir.filename() == pkg || package_xml_names(dir, pkg)) return dir;
+    if (fs::is_directory(dir / pkg, ec)) return dir / pkg;
+    if (dir == dir.parent_path()) break;
+  }
+  if (const char* env = std::getenv("ROS_PACKAGE_PATH")) {
+    std::stringstream paths(env);
+    std::string entry;
+    while (std::getline(paths, entry, ':')) {
+      if (entry.empty()) continue;
+      const fs::path root(entry);
+      if (root.filename() == pkg || package_xml_names(root, pkg)) return root;
+      if (fs::is_directory(root / pkg, ec)) return root / pkg;
+      for (const auto& sub : fs::directory_iterator(root, ec)) {
+        if (sub.is_directory(ec) && package_xml_names(sub.path(), pkg)) return sub.path();
+      }
+    }
+  }
+  return {};
+}
+
+fs::path resolve_mesh(const std::string& uri, const fs::path& base, const std::string& where) {
+  const std::string kPackage = "package://", kFile = "file://";
+  if (uri.rfind(kPackage, 0) == 0) {
+    const std::string rest = uri.substr(kPackage.size());
+    const size_t slash = rest.find('/');
+    const std::string pkg = rest.substr(0, slash);
+    const fs::path dir = find_package_dir(pkg, base);
+    if (dir.empty()) {
+      throw std::runtime_error(where + ": mesh '" + uri + "': package '" + pkg +
+                               "' not found above " + base.string() + " nor in ROS_PACKAGE_PATH");
+    }
+    return slash == std::string::npos ? dir : dir / rest.substr(slash + 1);
+  }
+  fs::path p(uri.rfind(kFile, 0) == 0 ? uri.substr(kFile.size()) : uri);
+  return p.is_absolute() ? p : base / p;
+}
+
+}  // namespace
+
+TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) {
+    throw std::runtime_error("mesh file '" + path + "' does not exist");
+  }
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  if (!scene || !scene->mRootNode) {
+    throw std::runtime_error("mesh file '" + path +
+                             "' cannot be read: " + importer.GetErrorString());
+  }
+  TriangleMesh mesh;
+  // Every node's meshes with the node's accumulated transform (DAE files place parts by nodes).
+  std::function<void(const aiNode*, const aiMatrix4x4&)> visit = [&](const aiNode* node,
+                                                                     const aiMatrix4x4& parent) {
+    const aiMatrix4x4 t = parent * node->mTransformation;
+    for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+      const aiMesh* m = scene->mMeshes[node->mMeshes[k]];
+      const int offset = static_cast<int>(mesh.vertices.size());
+      for (unsigned v = 0; v < m->mNumVertices; ++v) {
+        const aiVector3D p = t * m->mVertices[v];
+        mesh.vertices.push_back(Vec3(p.x, p.y, p.z).cwiseProduct(scale));
+      }
+      for (unsigned f = 0; f < m->mNumFaces; ++f) {
+        const aiFace& face = m->mFaces[f];
+        if (face.mNumIndices != 3) continue;  // points and lines left by the triangulation
+        mesh.triangles.emplace_back(offset + static_cast<int>(face.mIndices[0]),
+                                    offset + static_cast<int>(face.mIndices[1]),
+                                    offset + static_cast<int>(face.mIndices[2]));
+      }
+    }
+    for (unsigned c = 0; c < node->mNumChildren; ++c) visit(node->mChildren[c], t);
+  };
+  visit(scene->mRootNode, aiMatrix4x4());
+  if (mesh.triangles.empty()) {
+    throw std::runtime_error("mesh file '" + path + "' holds no triangles");
+  }
+  // Mirroring scales (an odd number of negative factors) turn the triangles inside out.
+  if (scale.x() * scale.y() * scale.z() < 0.0) {
+    for (Eigen::Vector3i& tri : mesh.triangles) std::swap(tri[1], tri[2]);
+  }
+  return mesh;
+}
+
+namespace {
+
+std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
+                                   const fs::path& base,
+                                   const std::map<std::string, double>& joint_values) {
+  for (const auto& [name, value] : joint_values) {
+    if (!model.getJoint(name)) {
+      throw std::runtime_error(doc + ": joint '" + name +
+                               "' (in the joint values) is not in robot '" + model.getName() + "'");
+    }
+    if (!std::isfinite(value)) {
+      throw std::runtime_error(doc + ": joint '" + name + "': the value is not finite");
+    }
+  }
+  std::vector<Obstacle> out;
+  const urdf::LinkConstSharedPtr root = model.getRoot();
+  if (!root) throw std::runtime_error(doc + ": the robot has no root link");
+
+  std::function<void(const urdf::Link&, const Eigen::Isometry3d&, bool)> visit =
+      [&](const urdf::Link& link, const Eigen::Isometry3d& pose, bool moving) {
+        const auto& collisions = link.collision_array;
+        for (size_t i = 0; i < collisions.size(); ++i) {
+          const urdf::Collision& col = *collisions[i];
+          Obstacle ob;
+          ob.name = collisions.size() > 1 ? link.name + "/" + std::to_string(i) : link.name;
+          const std::string where =
+              doc + ": link '" + link.name + "' collision " + std::to_string(i);
+          ob.pose = pose * to_iso(col.origin);
+          ob.moving = moving;
+          if (!col.geometry) throw std::runtime_error(where + ": no geometry");
+          auto positive = [&](double v, const std::string& what) {
+            if (!(std::isfinite(v) && v > 0.0)) {
+              std::ostringstream msg;
+              msg << where << ": " << what << " must be positive (got " << v << ")";
+              throw std::runtime_error(msg.str());
+            }
+          };
+          switch (col.geometry->type) {
+            case urdf::Geometry::BOX: {
+              const auto& g = static_cast<const urdf::Box&>(*col.geometry);
+              positive(g.dim.x, "box size x");
+              positive(g.dim.y, "box size y");
+              positive(g.dim.z, "box size z");
+              ob.shape.kind = ObstacleShape::Kind::kBox;
+              ob.shape.size = Vec3(g.dim.x, g.dim.y, g.dim.z);
+              break;
+            }
+            case urdf::Geometry::SPHERE: {
+              const auto& g = static_cast<const urdf::Sphere&>(*col.geometry);
+              positive(g.radius, "sphere radius");
+              ob.shape.kind = ObstacleShape::Kind::kSphere;
+              ob.shape.size = Vec3(g.radius, 0.0, 0.0);
+              break;
+            }
+            case urdf::Geometry::CYLINDER: {
+              const auto& g = static_cast<const urdf::Cylinder&>(*col.geometry);
+              positive(g.radius, "cylinder radius");
+              positive(g.length, "cylinder length");
+              ob.shape.kind = ObstacleShape::Kind::kCylinder;
+              ob.shape.size = Vec3(g.radius, g.length, 0.0);
+              break;
+            }
+            case urdf::Geometry::MESH: {
+              const auto& g = static_cast<const urdf::Mesh&>(*col.geometry);
+              const Vec3 scale(g.scale.x, g.scale.y, g.scale.z);
+              for (int k = 0; k < 3; ++k) {
+                if (!(std::isfinite(scale[k]) && scale[k] != 0.0)) {
+                  std::ostringstream msg;
+                  msg << where << ": mesh scale "
+                      << "xyz"[k] << " must be finite and non-zero (got " << scale[k] << ")";
+                  throw std::runtime_error(msg.str());
+                }
+              }
+              const fs::path file = resolve_mesh(g.filename, base, where);
+              try {
+                ob.shape.mesh =
+                    std::make_shared<TriangleMesh>(load_mesh_file(file.string(), scale));
+              } catch (const std::runtime_error& e) {
+                throw std::runtime_error(where + ": mesh '" + g.filename + "': " + e.what());
+              }
+              ob.shape.kind = ObstacleShape::Kind::kMesh;
+              break;
+            }
+            default:
+              throw std::runtime_error(where + ": unknown geometry type");
+          }
+          out.push_back(std::move(ob));
+        }
+        for (const urdf::JointSharedPtr& joint : link.child_joints) {
+          const urdf::LinkConstSharedPtr child = model.getLink(joint->child_link_name);
+          if (!child) continue;
+          const auto it = joint_values.find(joint->name);
+          const double q = it == joint_values.end() ? 0.0 : it->second;
+          const Vec3 axis(joint->axis.x, joint->axis.y, joint->axis.z);
+          Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+          bool movable = false;
+          switch (joint->type) {
+            case urdf::Joint::REVOLUTE:
+            case urdf::Joint::CONTINUOUS:
+              movable = true;
+              if (axis.norm() > 0.0)
+                motion.linear() = Eigen::AngleAxisd(q, axis.normalized()).matrix();
+              break;
+            case urdf::Joint::PRISMATIC:
+              movable = true;
+              if (axis.norm() > 0.0) motion.translation() = q * axis.normalized();
+              break;
+            case urdf::Joint::FLOATING:
+            case urdf::Joint::PLANAR:
+              movable = true;
+              break;
+            default:
+              break;
+          }
+          visit(*child, pose * to_iso(joint->parent_to_joint_origin_transform) * motion,
+                moving || movable);
+        }
+      };
+  visit(*root, Eigen::Isometry3d::Identity(), false);
+  return out;
+}
+
+}  // namespace
+
+std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
+                                           const std::map<std::string, double>& joint_values) {
+  const std::string doc = "<urdf string>";
+  const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
+  return obstacles_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir),
+                      joint_values);
+}
+
+std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
+                                          const std::map<std::string, double>& joint_values) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("URDF file '" + path + "' cannot be opened");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = "URDF file '" + path + "'";
+  const urdf::ModelInterfaceSharedPtr model = parse(text.str(), doc);
+  return obstacles_of(*model, doc, fs::path(path).parent_path(), joint_values);
+}
+
+}  // namespace corde
