@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "corde_sim/boundary.h"
+#include "corde_sim/contact.h"
 #include "corde_sim/energy_terms.h"
 #include "corde_sim/material.h"
 
@@ -100,6 +101,14 @@ class Rod {
   const std::vector<Vec3>& forces() const { return f_; }
   const std::vector<Vec3>& torques() const { return tau_; }
 
+  // The second half of step(), for a caller that computed the forces (compute_forces at t) and
+  // added to them (contacts, add_contact_force): integrates from t to t + h and applies the drives.
+  void integrate(double t, double h);
+  // Adds to the node forces of the current step (between compute_forces and integrate).
+  void add_step_force(int node, const Vec3& f) { f_[node] += f; }
+  // Which contacts the rod takes part in (contact.h).
+  ContactOptions& contact_options() { return contact_; }
+  const ContactOptions& contact_options() const { return contact_; }
   // One semi-implicit Euler step (eqs. 37-42) from t to t + h. Allocates nothing. Each drive,
   // constraint and ghost frame records the reaction it exerted over the step (boundary.h).
   void step(double t, double h, const Vec3& gravity);
@@ -161,6 +170,7 @@ class Rod {
   std::vector<Vec3> ext_f_, ext_tau_;  // empty until the first external force or torque
   bool has_external_ = false;
   Drag drag_;
+  ContactOptions contact_;
   GhostFrame ghost_[2];
 };
 

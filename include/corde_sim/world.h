@@ -1,9 +1,12 @@
 // Several rods sharing gravity and a clock.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "corde_sim/contact.h"
+#include "corde_sim/obstacle.h"
 #include "corde_sim/rod.h"
 
 namespace corde {
@@ -29,9 +32,18 @@ class World {
   Rod& rod(const std::string& name);
   const Rod& rod(const std::string& name) const;
 
+  // Obstacles the rods touch (none: null) and how contacts are solved (contact.h).
+  std::shared_ptr<ObstacleSet> obstacles;
+  ContactSettings contact;
+
   double time() const { return time_; }
   void set_time(double t) { time_ = t; }
-  void step();  // advances every rod by time_step
+  // Advances every rod by time_step: a world without anything to collide runs each rod's fused
+  // step; otherwise forces of every rod, then contacts (detection and the constraint solve), then
+  // the integration and the drives.
+  void step();
+  // The contact stage of the last step (null until a step needed it).
+  const ContactSystem* contacts() const { return contacts_.get(); }
   void step(int n) {
     for (int i = 0; i < n; ++i) step();
   }
@@ -41,6 +53,7 @@ class World {
  private:
   std::vector<Rod> rods_;
   double time_ = 0.0;
+  std::shared_ptr<ContactSystem> contacts_;
 };
 
 }  // namespace corde

@@ -315,6 +315,7 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
     throw SceneError(v.path() + ".shape: " + e.what());
   }
   if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
+  if (auto c = m.find("contact")) scene_detail::read_rod_contact(*c, &rod->contact_options());
   if (auto i = m.find("initial")) scene_detail::read_initial(*i, rod);
   RodEntry entry{v.path(), {}};
   if (auto b = m.find("boundary"))
@@ -506,6 +507,8 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
                                : (slash == 0 ? std::string("/") : source.substr(0, slash));
   for (size_t i = 0; i < items.size(); ++i)
     read_rod(items[i], static_cast<int>(i), &scene, &entries, base);
+  if (auto c = top.find("contact")) scene_detail::read_contact_settings(*c, &scene.world.contact);
+  if (auto o = top.find("obstacles")) scene_detail::read_obstacles(*o, &scene.world, base);
   if (auto g = top.find("grasps")) {
     std::map<std::string, std::string> names;
     for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps")) {

@@ -16,6 +16,7 @@
 #include "corde_sim/rod.h"
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/world.h"
 
 namespace corde {
 namespace scene_detail {
@@ -102,6 +103,12 @@ std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
                                           const std::string& base);
 // A rod's `initial` key: velocities, spins, a seeded perturbation (scene_motion.cpp).
 void read_initial(const Value& v, Rod* rod);
+
+// The top-level `obstacles` list into world->obstacles (URDF files relative to `base`), the
+// top-level `contact` settings, and a rod's `contact` options (scene_contact.cpp).
+void read_obstacles(const Value& list, World* world, const std::string& base);
+void read_contact_settings(const Value& v, ContactSettings* settings);
+void read_rod_contact(const Value& v, ContactOptions* options);
 
 // Applies "key.path=value" overrides to the tree (see parse_scene()). Returns, per override, the
 // path it set in message form ("rods[0].elements").

@@ -6,7 +6,8 @@ namespace corde {
 
 Rod& World::add_rod(Rod rod) {
   for (const Rod& r : rods_)
-    if (r.name() == rod.name()) throw std::invalid_argument("duplicate rod name '" + r.name() + "'");
+    if (r.name() == rod.name())
+      throw std::invalid_argument("duplicate rod name '" + r.name() + "'");
   rods_.push_back(std::move(rod));
   return rods_.back();
 }
@@ -17,12 +18,18 @@ Rod& World::rod(const std::string& name) {
   throw std::out_of_range("no rod named '" + name + "'");
 }
 
-const Rod& World::rod(const std::string& name) const {
-  return const_cast<World*>(this)->rod(name);
-}
+const Rod& World::rod(const std::string& name) const { return const_cast<World*>(this)->rod(name); }
 
 void World::step() {
-  for (Rod& r : rods_) r.step(time_, time_step, gravity);
+  if (!ContactSystem::needed(*this)) {
+    for (Rod& r : rods_) r.step(time_, time_step, gravity);
+  } else {
+    for (Rod& r : rods_) r.compute_forces(time_, gravity);
+    // A copy of a world (a snapshot) shares the system until it steps on its own.
+    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
+    contacts_->solve(*this, time_step);
+    for (Rod& r : rods_) r.integrate(time_, time_step);
+  }
   time_ += time_step;
 }
 

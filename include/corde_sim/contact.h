@@ -1,0 +1,103 @@
+// Contacts of rods with obstacles, with other rods and with themselves, solved as velocity
+// constraints with exact Coulomb friction (docs/model.md, "Contacts").
+//
+// Each step: detection finds every pair (segment, obstacle) and (segment, segment) whose surfaces
+// are within a speculative margin (the distance the pair can close in one step, plus a small
+// skin); the solver then finds impulses such that after the step no gap is closed past zero
+// (d + h v_n >= 0: nothing tunnels at the speeds the scene reaches) and the tangential impulse
+// lies in the Coulomb disc |p_t| <= mu p_n (sticking while inside, sliding on its rim), by
+// projected Gauss-Seidel over the contacts, warm started from the last step's impulses. The
+// impulses enter the step as forces p / h on the segments' nodes, split by the contact point's
+// position along the segment.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "corde_sim/obstacle.h"
+
+namespace corde {
+
+class Rod;
+class World;
+
+// Per rod: which contacts it takes part in.
+struct ContactOptions {
+  bool self = false;       // its own non-neighbouring segments (costs a broad phase per step)
+  bool rods = false;       // other rods that also have `rods` (opt in, like self)
+  bool obstacles = true;   // the world's obstacles
+  double friction = -1.0;  // rod-rod and self friction; < 0: ContactSettings::friction
+};
+
+struct ContactSettings {
+  int iterations = 30;          // Gauss-Seidel sweeps per step
+  double friction = 0.4;        // default rod-rod Coulomb coefficient
+  double skin = 0.05;           // extra detection distance, a fraction of the rod radius
+  double push_out = 0.2;        // fraction of a penetration removed per step (Baumgarte)
+  double max_push_speed = 0.5;  // m/s, cap on the separating speed that removes penetration
+};
+
+struct Contact {
+  int rod_a = 0, seg_a = 0;
+  double s_a = 0.0;            // along segment a, 0..1
+  int rod_b = -1, seg_b = -1;  // the other rod and segment, or -1 for an obstacle
+  double s_b = 0.0;
+  int obstacle = -1;            // the obstacle's index when rod_b < 0
+  Vec3 normal = Vec3::UnitZ();  // unit, from b (or the obstacle) towards a
+  Vec3 point = Vec3::Zero();    // on b's surface (world), for display
+  double gap = 0.0;             // distance between the surfaces (negative: penetration)
+  double mu = 0.0;
+  double pn = 0.0;         // normal impulse of the step (N s)
+  Vec3 pt = Vec3::Zero();  // tangential impulse (N s)
+};
+
+// Statistics of the last step, for diagnostics and tests.
+struct ContactStats {
+  int contacts = 0;              // pairs within the margin
+  int active = 0;                // pairs that carried an impulse
+  double max_penetration = 0.0;  // largest -gap at detection (m, >= 0)
+  int candidate_pairs = 0;       // segment pairs the broad phase passed to the narrow phase
+};
+
+// The contact stage of World::step: detection and the constraint solve. Holds the scratch and the
+// warm-start impulses between steps.
+class ContactSystem {
+ public:
+  // True when the world has anything to collide: obstacles, or rods that take part in rod or self
+  // contact. A world without that pays nothing.
+  static bool needed(const World& world);
+
+  // Called between the forces (Rod::compute_forces at t) and the integration: adds the contact
+  // forces p / h to the rods' node forces.
+  void solve(World& world, double h);
+
+  const std::vector<Contact>& contacts() const { return contacts_; }
+  const ContactStats& stats() const { return stats_; }
+
+ private:
+  void detect(World& world, double h);
+  void detect_rod_pairs(World& world, double h);
+  void warm_start();
+
+  std::vector<Contact> contacts_;
+  ContactStats stats_;
+  // Scratch, reused across steps.
+  std::vector<std::vector<Vec3>> velocity_;  // per rod: predicted node velocities
+  std::vector<std::vector<double>> inv_mass_;
+  std::vector<double> scratch_w_;  // per contact: the pair's inverse mass
+  std::vector<SegmentContact> found_;
+  std::vector<int> which_;
+  struct CellEntry {
+    std::uint64_t cell;
+    int item;
+  };
+  std::vector<CellEntry> cells_;
+  std::vector<std::pair<int, int>> items_;  // (rod, segment) of a broad-phase item
+  std::vector<Eigen::AlignedBox3d> boxes_;
+  std::unordered_map<std::uint64_t, std::pair<double, Vec3>> previous_;  // warm start
+};
+
+}  // namespace corde

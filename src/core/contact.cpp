@@ -1,0 +1,329 @@
+#include "corde_sim/contact.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "corde_sim/segment_distance.h"
+#include "corde_sim/world.h"
+
+namespace corde {
+namespace {
+
+// A key that names a contact pair across steps (for the warm start).
+std::uint64_t pair_key(const Contact& c) {
+  const std::uint64_t other =
+      c.rod_b >= 0
+          ? (static_cast<std::uint64_t>(c.rod_b) << 20 | static_cast<std::uint64_t>(c.seg_b))
+          : (std::uint64_t{1} << 40 | static_cast<std::uint64_t>(c.obstacle));
+  // A segment's contacts at its start node, inside and at its end node are different pairs.
+  const std::uint64_t where = c.s_a <= 0.0 ? 0 : c.s_a >= 1.0 ? 2 : 1;
+  return (static_cast<std::uint64_t>(c.rod_a) << 54) ^ (static_cast<std::uint64_t>(c.seg_a) << 43) ^
+         (where << 41) ^ other;
+}
+
+// Cell coordinates packed in 21 bits each (offset so that negatives fit).
+std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+  const std::int64_t o = 1 << 20;
+  auto c = [&](std::int64_t v) {
+    return static_cast<std::uint64_t>(std::clamp<std::int64_t>(v + o, 0, (1 << 21) - 1));
+  };
+  return c(x) << 42 | c(y) << 21 | c(z);
+}
+
+// A unit vector perpendicular to v.
+Vec3 any_perpendicular(const Vec3& v) {
+  const Vec3 a = std::abs(v.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
+  return v.cross(a).normalized();
+}
+
+}  // namespace
+
+bool ContactSystem::needed(const World& world) {
+  const bool obstacles = world.obstacles && world.obstacles->size() > 0;
+  int rods = 0;
+  for (const Rod& r : world.rods()) {
+    const ContactOptions& o = r.contact_options();
+    if (o.self || (obstacles && o.obstacles)) return true;
+    if (o.rods) ++rods;
+  }
+  return rods >= 2;
+}
+
+void ContactSystem::solve(World& world, double h) {
+  auto& rods = world.rods();
+  const int nr = static_cast<int>(rods.size());
+  velocity_.resize(nr);
+  inv_mass_.resize(nr);
+  const double t_end = world.time() + h;
+  // The velocities each node would have after the step without contacts (drives: theirs).
+  for (int r = 0; r < nr; ++r) {
+    Rod& rod = rods[r];
+    const int nn = rod.num_nodes();
+    auto& v = velocity_[r];
+    auto& w = inv_mass_[r];
+    v.resize(nn);
+    w.resize(nn);
+    for (int i = 0; i < nn; ++i) {
+      w[i] = 1.0 / rod.node_masses()[i];
+      v[i] = rod.velocities()[i] + (h * w[i]) * rod.forces()[i];
+    }
+    for (const NodeDrive& d : rod.node_drives()) {
+      w[d.node] = 0.0;
+      if (d.kind == NodeDrive::Kind::kTarget)
+        v[d.node] = (d.target - rod.positions()[d.node]) / h;
+      else
+        drive_position(d, t_end, &v[d.node]);
+    }
+  }
+  detect(world, h);
+  warm_start();
+  const ContactSettings& cs = world.contact;
+  auto point_velocity = [&](int rod, int seg, double s) {
+    return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
+  };
+  auto apply = [&](const Contact& c, const Vec3& p) {
+    velocity_[c.rod_a][c.seg_a] += ((1.0 - c.s_a) * inv_mass_[c.rod_a][c.seg_a]) * p;
+    velocity_[c.rod_a][c.seg_a + 1] += (c.s_a * inv_mass_[c.rod_a][c.seg_a + 1]) * p;
+    if (c.rod_b >= 0) {
+      velocity_[c.rod_b][c.seg_b] -= ((1.0 - c.s_b) * inv_mass_[c.rod_b][c.seg_b]) * p;
+      velocity_[c.rod_b][c.seg_b + 1] -= (c.s_b * inv_mass_[c.rod_b][c.seg_b + 1]) * p;
+    }
+  };
+  std::vector<double>& wsum = scratch_w_;
+  wsum.resize(contacts_.size());
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
+    const auto& wa = inv_mass_[c.rod_a];
+    double w = (1 - c.s_a) * (1 - c.s_a) * wa[c.seg_a] + c.s_a * c.s_a * wa[c.seg_a + 1];
+    if (c.rod_b >= 0) {
+      const auto& wb = inv_mass_[c.rod_b];
+      w += (1 - c.s_b) * (1 - c.s_b) * wb[c.seg_b] + c.s_b * c.s_b * wb[c.seg_b + 1];
+    }
+    wsum[k] = w;
+    if (w > 0.0) apply(c, c.pn * c.normal + c.pt);
+  }
+  for (int it = 0; it < cs.iterations; ++it) {
+    for (size_t k = 0; k < contacts_.size(); ++k) {
+      Contact& c = contacts_[k];
+      const double w = wsum[k];
+      if (!(w > 0.0)) continue;
+      Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
+      if (c.rod_b >= 0) vr -= point_velocity(c.rod_b, c.seg_b, c.s_b);
+      // Normal: d + h v_n >= 0 for a gap; a penetration is pushed out at a capped speed.
+      const double target =
+          c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
+      const double vn = vr.dot(c.normal);
+      const double pn = std::max(0.0, c.pn + (target - vn) / w);
+      Vec3 dp = (pn - c.pn) * c.normal;
+      c.pn = pn;
+      // Friction: the impulse that stops the sliding, projected onto the Coulomb disc.
+      // (An impulse P changes the relative velocity by w P: the pair's inverse mass is a scalar.)
+      const Vec3 after = vr + w * dp;
+      const Vec3 vt = after - c.normal * after.dot(c.normal);
+      Vec3 pt = c.pt - vt / w;
+      const double limit = c.mu * c.pn, norm = pt.norm();
+      if (norm > limit) pt *= limit / norm;
+      dp += pt - c.pt;
+      c.pt = pt;
+      apply(c, dp);
+    }
+  }
+  // The impulses as forces of the step; remembered for the next step's warm start.
+  previous_.clear();
+  stats_.active = 0;
+  for (const Contact& c : contacts_) {
+    if (c.pn <= 0.0) continue;
+    ++stats_.active;
+    previous_[pair_key(c)] = {c.pn, c.pt};
+    const Vec3 f = (c.pn * c.normal + c.pt) / h;
+    rods[c.rod_a].add_step_force(c.seg_a, (1.0 - c.s_a) * f);
+    rods[c.rod_a].add_step_force(c.seg_a + 1, c.s_a * f);
+    if (c.rod_b >= 0) {
+      rods[c.rod_b].add_step_force(c.seg_b, -(1.0 - c.s_b) * f);
+      rods[c.rod_b].add_step_force(c.seg_b + 1, -c.s_b * f);
+    }
+  }
+}
+
+void ContactSystem::warm_start() {
+  for (Contact& c : contacts_) {
+    c.pn = 0.0;
+    c.pt.setZero();
+    auto it = previous_.find(pair_key(c));
+    if (it == previous_.end()) continue;
+    c.pn = it->second.first;
+    Vec3 pt = it->second.second - c.normal * c.normal.dot(it->second.second);
+    const double limit = c.mu * c.pn, norm = pt.norm();
+    if (norm > limit) pt *= limit / norm;
+    c.pt = pt;
+  }
+}
+
+void ContactSystem::detect(World& world, double h) {
+  contacts_.clear();
+  stats_ = ContactStats();
+  auto& rods = world.rods();
+  const ContactSettings& cs = world.contact;
+  if (world.obstacles && world.obstacles->size() > 0) {
+    const ObstacleSet& obs = *world.obstacles;
+    for (int r = 0; r < static_cast<int>(rods.size()); ++r) {
+      const Rod& rod = rods[r];
+      if (!rod.contact_options().obstacles) continue;
+      const double radius = rod.section().radius;
+      const auto& x = rod.positions();
+      const auto& v = velocity_[r];
+      const auto& v0 = rod.velocities();
+      const int n = rod.num_segments();
+      // Each node as a point, and each segment at its closest interior point: a segment that
+      // turns within the step can bring either end down, so one point per segment is not enough.
+      for (int item = 0; item <= 2 * n; ++item) {
+        const bool node = item <= n;
+        const int s = node ? std::min(item, n - 1) : item - n - 1;
+        const int i0 = node ? item : s, i1 = node ? item : s + 1;
+        // How far the point or segment can travel in the step, plus a skin.
+        const double speed = std::max({v[i0].norm(), v[i1].norm(), v0[i0].norm(), v0[i1].norm()});
+        const double reach = radius * (1.0 + cs.skin) + h * speed;
+        found_.clear();
+        which_.clear();
+        obs.query(x[i0], x[i1], reach, &found_, &which_);
+        for (size_t k = 0; k < found_.size(); ++k) {
+          const SegmentContact& f = found_[k];
+          if (!node && (f.s <= 1e-9 || f.s >= 1.0 - 1e-9)) continue;  // a node's contact
+          Contact c;
+          c.rod_a = r;
+          c.seg_a = s;
+          c.s_a = node ? (item == n ? 1.0 : 0.0) : f.s;
+          c.obstacle = which_[k];
+          c.normal = f.normal;
+          c.point = f.on_obstacle;
+          c.gap = f.distance - radius;
+          c.mu = obs.obstacle(which_[k]).friction;
+          contacts_.push_back(c);
+        }
+      }
+    }
+  }
+  detect_rod_pairs(world, h);
+  stats_.contacts = static_cast<int>(contacts_.size());
+  for (const Contact& c : contacts_)
+    stats_.max_penetration = std::max(stats_.max_penetration, -c.gap);
+}
+
+// Rod-rod and self contact: segment boxes (grown by what each can travel in the step) hashed into
+// a uniform grid no finer than the largest box, so each box covers at most 8 cells and the cost is
+// linear in the number of segments; pairs are tested once, in the first cell both cover.
+void ContactSystem::detect_rod_pairs(World& world, double h) {
+  auto& rods = world.rods();
+  const ContactSettings& cs = world.contact;
+  const int nr = static_cast<int>(rods.size());
+  int with_rods = 0;
+  bool any_self = false;
+  for (const Rod& r : rods) {
+    with_rods += r.contact_options().rods;
+    any_self = any_self || r.contact_options().self;
+  }
+  if (!any_self && with_rods < 2) return;
+  items_.clear();
+  boxes_.clear();
+  double cell = 0.0;
+  for (int r = 0; r < nr; ++r) {
+    const Rod& rod = rods[r];
+    const ContactOptions& o = rod.contact_options();
+    if (!o.self && !(o.rods && with_rods >= 2)) continue;
+    const double radius = rod.section().radius;
+    const auto& x = rod.positions();
+    const auto& v = velocity_[r];
+    for (int s = 0; s < rod.num_segments(); ++s) {
+      const double grow = radius * (1.0 + cs.skin) + h * std::max(v[s].norm(), v[s + 1].norm());
+      Eigen::AlignedBox3d box(x[s].cwiseMin(x[s + 1]), x[s].cwiseMax(x[s + 1]));
+      box.min().array() -= grow;
+      box.max().array() += grow;
+      cell = std::max(cell, box.sizes().maxCoeff());
+      items_.push_back({r, s});
+      boxes_.push_back(box);
+    }
+  }
+  if (items_.size() < 2 || !(cell > 0.0) || !std::isfinite(cell)) return;
+  const double inv = 1.0 / cell;
+  auto lo_cell = [&](const Eigen::AlignedBox3d& b) {
+    return Eigen::Vector3d((b.min() * inv).array().floor());
+  };
+  auto hi_cell = [&](const Eigen::AlignedBox3d& b) {
+    return Eigen::Vector3d((b.max() * inv).array().floor());
+  };
+  cells_.clear();
+  for (int i = 0; i < static_cast<int>(items_.size()); ++i) {
+    const Vec3 lo = lo_cell(boxes_[i]), hi = hi_cell(boxes_[i]);
+    for (double cx = lo.x(); cx <= hi.x(); ++cx)
+      for (double cy = lo.y(); cy <= hi.y(); ++cy)
+        for (double cz = lo.z(); cz <= hi.z(); ++cz)
+          cells_.push_back({cell_key(static_cast<std::int64_t>(cx), static_cast<std::int64_t>(cy),
+                                     static_cast<std::int64_t>(cz)),
+                            i});
+  }
+  std::sort(cells_.begin(), cells_.end(), [](const CellEntry& a, const CellEntry& b) {
+    return a.cell != b.cell ? a.cell < b.cell : a.item < b.item;
+  });
+  for (size_t g0 = 0; g0 < cells_.size();) {
+    size_t g1 = g0 + 1;
+    while (g1 < cells_.size() && cells_[g1].cell == cells_[g0].cell) ++g1;
+    for (size_t p = g0; p < g1; ++p)
+      for (size_t q = p + 1; q < g1; ++q) {
+        const int i = cells_[p].item, j = cells_[q].item;
+        const Eigen::AlignedBox3d &bi = boxes_[i], &bj = boxes_[j];
+        if (!bi.intersects(bj)) continue;
+        // Only in the first cell both cover (the lowest corner of their common cells).
+        const Vec3 first = lo_cell(bi).cwiseMax(lo_cell(bj));
+        if (cell_key(static_cast<std::int64_t>(first.x()), static_cast<std::int64_t>(first.y()),
+                     static_cast<std::int64_t>(first.z())) != cells_[p].cell)
+          continue;
+        const auto [ra, sa] = items_[i];
+        const auto [rb, sb] = items_[j];
+        const Rod &rod_a = rods[ra], &rod_b = rods[rb];
+        if (ra == rb) {
+          if (!rod_a.contact_options().self) continue;
+          // Neighbours along the rod touch by construction: skip those within about a diameter.
+          const double l = rod_a.rest_lengths()[sa];
+          const int skip = 1 + static_cast<int>(std::ceil(0.8 * M_PI * rod_a.section().radius / l));
+          if (std::abs(sa - sb) <= skip) continue;
+        } else if (!rod_a.contact_options().rods || !rod_b.contact_options().rods) {
+          continue;
+        }
+        ++stats_.candidate_pairs;
+        const auto& xa = rod_a.positions();
+        const auto& xb = rod_b.positions();
+        const SegmentPair sp = closest_points(xa[sa], xa[sa + 1], xb[sb], xb[sb + 1]);
+        const double ra_ = rod_a.section().radius, rb_ = rod_b.section().radius;
+        const Vec3 pa = xa[sa] + sp.s * (xa[sa + 1] - xa[sa]);
+        const Vec3 pb = xb[sb] + sp.t * (xb[sb + 1] - xb[sb]);
+        const Vec3 d = pa - pb;
+        const double dist = d.norm();
+        const auto& va = velocity_[ra];
+        const auto& vb = velocity_[rb];
+        const double closing =
+            (va[sa].norm() + va[sa + 1].norm() + vb[sb].norm() + vb[sb + 1].norm());
+        const double gap = dist - ra_ - rb_;
+        if (gap > cs.skin * (ra_ + rb_) + h * closing) continue;
+        Contact c;
+        c.rod_a = ra;
+        c.seg_a = sa;
+        c.s_a = sp.s;
+        c.rod_b = rb;
+        c.seg_b = sb;
+        c.s_b = sp.t;
+        c.normal =
+            dist > 1e-12 * (ra_ + rb_) ? Vec3(d / dist) : any_perpendicular(xa[sa + 1] - xa[sa]);
+        c.point = pb + rb_ * c.normal;
+        c.gap = gap;
+        const double ma = rod_a.contact_options().friction >= 0.0 ? rod_a.contact_options().friction
+                                                                  : cs.friction;
+        const double mb = rod_b.contact_options().friction >= 0.0 ? rod_b.contact_options().friction
+                                                                  : cs.friction;
+        c.mu = std::sqrt(ma * mb);
+        contacts_.push_back(c);
+      }
+    g0 = g1;
+  }
+}
+
+}  // namespace corde
