@@ -197,6 +197,7 @@ Rod resample_rod(const Rod& rod, int elements) {
     out.add_load(load);
   }
   out.set_drag(rod.drag());
+  out.contact_options() = rod.contact_options();
   out.ghost_start() = rod.ghost_start();
   out.ghost_end() = rod.ghost_end();
   return out;
