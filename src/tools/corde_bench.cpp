@@ -7,6 +7,10 @@
 // bend/twist internal friction, a force load and a torque load. The step's cost does not depend on
 // the state (no contacts, no iterations), so the figures hold for any scene of that size.
 //
+// Contacts (below): BM_WorldStepNoContact (World::step without anything to collide, against
+// BM_RodStep/100), BM_RopeOnFloorSelfContact (a 1 m rope coiled on a floor, self contact on: time
+// per World::step, the step and the real-time factor) and BM_ContactScaling/N/self.
+//
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //   corde_bench --benchmark_filter=BM_RodStep/100
@@ -17,6 +21,8 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <sstream>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -24,7 +30,9 @@
 #include "corde_sim/obstacle.h"
 #include "corde_sim/rod.h"
 #include "corde_sim/rod_shape.h"
+#include "corde_sim/scene.h"
 #include "corde_sim/stability.h"
+#include "corde_sim/world.h"
 
 namespace {
 
@@ -189,6 +197,106 @@ void BM_ObstacleQuery(benchmark::State& state) {
 }
 
 BENCHMARK(BM_ObstacleQuery)->DenseRange(0, 5)->Unit(benchmark::kNanosecond);
+
+// World::step of the bench rod at N = 100 in a world without obstacles and without rod or self
+// contact: the fused per-rod step, no contact work, so the same cost as BM_RodStep/100.
+void BM_WorldStepNoContact(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  BenchRod b = make_rod(n);
+  corde::World world;
+  world.gravity = kGravity;
+  world.time_step = b.h;
+  world.add_rod(std::move(b.rod));
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    world.step();
+    benchmark::DoNotOptimize(world.rods()[0].positions().data());
+    benchmark::ClobberMemory();
+  }
+  report(state, n, std::chrono::steady_clock::now() - start);
+  if (world.contacts() != nullptr) state.SkipWithError("the world ran the contact stage");
+  if (!world.finite()) state.SkipWithError("the rod blew up (non-finite state)");
+}
+
+BENCHMARK(BM_WorldStepNoContact)->Arg(100)->Unit(benchmark::kMicrosecond);
+
+// A rope of n elements of 1 cm (radius 5 mm, E = E_s = 10 MPa, nylon_rope's density and damping)
+// lying on a floor plane (friction 0.5) as a flat Archimedean spiral whose neighbouring turns
+// touch (centre lines 2 r + 0.1 mm apart), self contact on or off; time_step auto. Every element
+// rests on the floor and, with self contact, most touch the next turn: the contact count grows
+// linearly with n.
+corde::Scene rope_on_floor(int n, bool self) {
+  const double r = 0.005, l = 0.01, spacing = 2.0 * r + 1e-4, a = 0.03;
+  const double b = spacing / (2.0 * M_PI);  // radius = a + b theta
+  std::ostringstream y;
+  y.precision(9);
+  y << "time_step: auto\nduration: 1000\n"
+    << "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: 0.5}\n"
+    << "contact: {friction: 0.4}\n"
+    << "rods:\n  - name: rope\n    elements: " << n << "\n    radius: " << r
+    << "\n    material: {preset: nylon_rope, E: 1.0e7, E_s: 1.0e7}\n"
+    << "    contact: {self: " << (self ? "true" : "false") << "}\n"
+    << "    shape:\n      type: polyline\n      points:\n";
+  // Points about 2 mm apart along the spiral up to the rope's length.
+  const double length = n * l;
+  double theta = 0.0, s = 0.0;
+  Vec3 prev(a, 0.0, r);
+  y << "        - [" << prev.x() << ", " << prev.y() << ", " << prev.z() << "]\n";
+  while (s < length) {
+    theta += 0.002 / (a + b * theta);
+    const double rad = a + b * theta;
+    const Vec3 p(rad * std::cos(theta), rad * std::sin(theta), r);
+    s += (p - prev).norm();
+    prev = p;
+    y << "        - [" << p.x() << ", " << p.y() << ", " << p.z() << "]\n";
+  }
+  corde::Scene scene = corde::parse_scene(y.str());
+  // 100 steps first (about 3 ms): contacts found and warm started, as in a running scene.
+  scene.world.step(100);
+  return scene;
+}
+
+// Time per World::step (Time, wall), the step (step_us), the real-time factor (simulated seconds
+// per wall second, single thread) and the contacts of the last step.
+void run_world(benchmark::State& state, corde::World& world, int n) {
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    world.step();
+    benchmark::DoNotOptimize(world.rods()[0].positions().data());
+    benchmark::ClobberMemory();
+  }
+  const auto elapsed = std::chrono::steady_clock::now() - start;
+  report(state, n, elapsed);
+  const double secs = std::chrono::duration<double>(elapsed).count();
+  state.counters["step_us"] = world.time_step * 1e6;
+  state.counters["real_time_x"] =
+      secs > 0 ? world.time_step * static_cast<double>(state.iterations()) / secs : 0.0;
+  if (world.contacts() != nullptr) {
+    state.counters["contacts"] = world.contacts()->stats().contacts;
+    state.counters["max_pen_um"] = world.contacts()->stats().max_penetration * 1e6;
+  }
+  if (!world.finite()) state.SkipWithError("the rope blew up (non-finite state)");
+}
+
+// The scene: a 1 m rope of 100 elements coiled on the floor, self contact on.
+void BM_RopeOnFloorSelfContact(benchmark::State& state) {
+  corde::Scene scene = rope_on_floor(100, true);
+  run_world(state, scene.world, 100);
+}
+
+BENCHMARK(BM_RopeOnFloorSelfContact)->Unit(benchmark::kMicrosecond);
+
+// Cost against n: the coiled rope of n elements of 1 cm on the floor; second argument 1 = self
+// contact on, 0 = floor only.
+void BM_ContactScaling(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  corde::Scene scene = rope_on_floor(n, state.range(1) != 0);
+  run_world(state, scene.world, n);
+}
+
+BENCHMARK(BM_ContactScaling)
+    ->ArgsProduct({{50, 100, 200, 500, 1000, 2000}, {0, 1}})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
