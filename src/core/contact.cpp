@@ -102,7 +102,12 @@ void ContactSystem::solve(World& world, double h) {
     wsum[k] = w;
     if (w > 0.0) apply(c, c.pn * c.normal + c.pt);
   }
+  // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
+  // warm started, settle in a few sweeps), or the iteration limit.
+  stats_.iterations = 0;
   for (int it = 0; it < cs.iterations; ++it) {
+    double change = 0.0, largest = 0.0;
+    ++stats_.iterations;
     for (size_t k = 0; k < contacts_.size(); ++k) {
       Contact& c = contacts_[k];
       const double w = wsum[k];
@@ -126,7 +131,10 @@ void ContactSystem::solve(World& world, double h) {
       dp += pt - c.pt;
       c.pt = pt;
       apply(c, dp);
+      change = std::max(change, dp.norm());
+      largest = std::max(largest, c.pn);
     }
+    if (change <= 1e-6 * largest) break;
   }
   // The impulses as forces of the step; remembered for the next step's warm start.
   previous_.clear();
