@@ -380,6 +380,12 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("stability limiting rod", limiting_rod_);
   stat.add("rods", world_.rods().size());
   stat.add("grasps", grasps_.grasps().size());
+  // Contacts of the last step (none when the scene has nothing to collide).
+  const corde::ContactSystem* contacts = world_.contacts();
+  stat.add("obstacles", world_.obstacles ? world_.obstacles->size() : 0);
+  stat.add("contacts", contacts ? contacts->stats().contacts : 0);
+  stat.add("contacts carrying a force", contacts ? contacts->stats().active : 0);
+  stat.add("largest penetration (m)", contacts ? contacts->stats().max_penetration : 0.0);
   stat.add("recoveries from an invalid state", recoveries_);
   stat.add("last invalid state", last_problem_);
 }
