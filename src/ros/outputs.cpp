@@ -81,6 +81,62 @@ visualization_msgs::Marker base_marker(const std::string& ns, int id, int type,
   return m;
 }
 
+// The scene's obstacles, grey and half transparent: planes as a 10 m square slab below their
+// surface, capsules as a cylinder and two spheres, meshes as triangle lists.
+void add_obstacle_markers(const corde::ObstacleSet& set, const MarkerOptions& o,
+                          const ros::Time& stamp, visualization_msgs::MarkerArray* out) {
+  using visualization_msgs::Marker;
+  using Kind = corde::ObstacleShape::Kind;
+  int id = 0;
+  for (int i = 0; i < set.size(); ++i) {
+    const corde::Obstacle& ob = set.obstacle(i);
+    const Eigen::Isometry3d& pose = ob.pose;
+    const Eigen::Quaterniond q(pose.linear());
+    const corde::Vec3& size = ob.shape.size;
+    Marker m = base_marker("obstacles", id++, Marker::CUBE, o, stamp);
+    m.color = rgba(0.6, 0.6, 0.65, 0.5);
+    set_pose(pose.translation(), q, &m.pose);
+    switch (ob.shape.kind) {
+      case Kind::kPlane:
+        set_pose(pose * Eigen::Vector3d(0, 0, -0.005), q, &m.pose);
+        m.scale.x = m.scale.y = 10.0;
+        m.scale.z = 0.01;
+        break;
+      case Kind::kBox:
+        m.scale.x = size.x();
+        m.scale.y = size.y();
+        m.scale.z = size.z();
+        break;
+      case Kind::kSphere:
+        m.type = Marker::SPHERE;
+        m.scale.x = m.scale.y = m.scale.z = 2.0 * size.x();
+        break;
+      case Kind::kCylinder:
+      case Kind::kCapsule:
+        m.type = Marker::CYLINDER;
+        m.scale.x = m.scale.y = 2.0 * size.x();
+        m.scale.z = size.y();
+        if (ob.shape.kind == Kind::kCapsule)
+          for (double end : {-0.5, 0.5}) {
+            Marker cap = base_marker("obstacles", id++, Marker::SPHERE, o, stamp);
+            cap.color = m.color;
+            set_pose(pose * Eigen::Vector3d(0, 0, end * size.y()), q, &cap.pose);
+            cap.scale.x = cap.scale.y = cap.scale.z = 2.0 * size.x();
+            out->markers.push_back(cap);
+          }
+        break;
+      case Kind::kMesh:
+        m.type = Marker::TRIANGLE_LIST;
+        m.scale.x = m.scale.y = m.scale.z = 1.0;
+        if (ob.shape.mesh)
+          for (const Eigen::Vector3i& t : ob.shape.mesh->triangles)
+            for (int k = 0; k < 3; ++k) m.points.push_back(point(ob.shape.mesh->vertices[t[k]]));
+        break;
+    }
+    out->markers.push_back(std::move(m));
+  }
+}
+
 }  // namespace
 
 void TfFrames::layout(const corde::World& world, const std::vector<GraspView>& grasps,
@@ -229,9 +285,9 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
       }
       out->markers.push_back(std::move(m));
     }
-    // Clamps: every fixed or keyframed node and every ghost-clamped end (a ghost clamp also fixes its node,
-    // so each node is drawn once), oriented with the ghost frame or the adjacent segment (frozen
-    // too for a natural clamp). A flat box shows the clamp's d1/d2 axes, unlike a disc.
+    // Clamps: every fixed or keyframed node and every ghost-clamped end (a ghost clamp also fixes
+    // its node, so each node is drawn once), oriented with the ghost frame or the adjacent segment
+    // (frozen too for a natural clamp). A flat box shows the clamp's d1/d2 axes, unlike a disc.
     clamped.clear();
     for (const corde::NodeDrive& d : rod.node_drives())
       if (d.kind == corde::NodeDrive::Kind::kFixed || d.kind == corde::NodeDrive::Kind::kMotion)
@@ -277,6 +333,7 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
     label.text = g.name;
     out->markers.push_back(std::move(label));
   }
+  if (world.obstacles) add_obstacle_markers(*world.obstacles, o, stamp, out);
 }
 
 std::string strain_legend(const std::string& rod, double top) {
