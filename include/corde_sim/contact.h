@@ -13,8 +13,6 @@
 
 #include <cstdint>
 #include <memory>
-#include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "corde_sim/obstacle.h"
@@ -98,7 +96,13 @@ class ContactSystem {
   std::vector<CellEntry> cells_;
   std::vector<std::pair<int, int>> items_;  // (rod, segment) of a broad-phase item
   std::vector<Eigen::AlignedBox3d> boxes_;
-  std::unordered_map<std::uint64_t, std::pair<double, Vec3>> previous_;  // warm start
+  // The last step's impulses by pair key, sorted (kept, not reallocated, across steps).
+  struct Previous {
+    std::uint64_t key;
+    double pn;
+    Vec3 pt;
+  };
+  std::vector<Previous> previous_;
 };
 
 }  // namespace corde

@@ -51,6 +51,9 @@ class Motion {
                      const Vec3& turn_axis, Interpolation interpolation = Interpolation::kStop);
 
   Sample at(double t) const;
+  // The pose at t of a frame that was at `start` at time 0, moved about its own origin (a grasp's
+  // holder).
+  Eigen::Isometry3d pose_at(double t, const Eigen::Isometry3d& start) const;
   const std::vector<Keyframe>& keyframes() const { return frames_; }
   Interpolation interpolation() const { return how_; }
   const Vec3& turn_axis() const { return axis_; }

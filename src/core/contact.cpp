@@ -142,7 +142,7 @@ void ContactSystem::solve(World& world, double h) {
   for (const Contact& c : contacts_) {
     if (c.pn <= 0.0) continue;
     ++stats_.active;
-    previous_[pair_key(c)] = {c.pn, c.pt};
+    previous_.push_back({pair_key(c), c.pn, c.pt});
     const Vec3 f = (c.pn * c.normal + c.pt) / h;
     rods[c.rod_a].add_step_force(c.seg_a, (1.0 - c.s_a) * f);
     rods[c.rod_a].add_step_force(c.seg_a + 1, c.s_a * f);
@@ -151,16 +151,20 @@ void ContactSystem::solve(World& world, double h) {
       rods[c.rod_b].add_step_force(c.seg_b + 1, -c.s_b * f);
     }
   }
+  std::sort(previous_.begin(), previous_.end(),
+            [](const Previous& a, const Previous& b) { return a.key < b.key; });
 }
 
 void ContactSystem::warm_start() {
   for (Contact& c : contacts_) {
     c.pn = 0.0;
     c.pt.setZero();
-    auto it = previous_.find(pair_key(c));
-    if (it == previous_.end()) continue;
-    c.pn = it->second.first;
-    Vec3 pt = it->second.second - c.normal * c.normal.dot(it->second.second);
+    const std::uint64_t key = pair_key(c);
+    auto it = std::lower_bound(previous_.begin(), previous_.end(), key,
+                               [](const Previous& p, std::uint64_t k) { return p.key < k; });
+    if (it == previous_.end() || it->key != key) continue;
+    c.pn = it->pn;
+    Vec3 pt = it->pt - c.normal * c.normal.dot(it->pt);
     const double limit = c.mu * c.pn, norm = pt.norm();
     if (norm > limit) pt *= limit / norm;
     c.pt = pt;

@@ -133,4 +133,12 @@ Motion::Sample Motion::at(double t) const {
   return s;
 }
 
+Eigen::Isometry3d Motion::pose_at(double t, const Eigen::Isometry3d& start) const {
+  const Sample s = at(t);
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = s.rotation.toRotationMatrix() * start.linear();
+  pose.translation() = start.translation() + s.displacement;
+  return pose;
+}
+
 }  // namespace corde

@@ -564,16 +564,16 @@ void Rod::step(double t, double h, const Vec3& gravity) {
   apply_drives(t + h, h);
 }
 
-// Sets the kinematic items to their drives' state at the step's end and projects the
-// constrained ones; each records the force or torque it took (a reaction, what a load cell in the
-// support reads with the opposite sign): m dv/dt - f for a node, I dw/dt + w x I w - tau for a
-// segment, from the velocities before and after (the integrator left kinematic ones unchanged).
 void Rod::integrate(double t, double h) {
   const int n = num_segments();
   for (int b0 = 0; b0 < n; b0 += kStepBlock) integrate_block(b0, std::min(b0 + kStepBlock, n), h);
   apply_drives(t + h, h);
 }
 
+// Sets the kinematic items to their drives' state at the step's end and projects the
+// constrained ones; each records the force or torque it took (a reaction, what a load cell in the
+// support reads with the opposite sign): m dv/dt - f for a node, I dw/dt + w x I w - tau for a
+// segment, from the velocities before and after (the integrator left kinematic ones unchanged).
 void Rod::apply_drives(double t_end, double h) {
   for (NodeDrive& d : node_drives_) {
     Vec3& x = x_[d.node];

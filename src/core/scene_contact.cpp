@@ -20,13 +20,7 @@ Eigen::Isometry3d read_pose(Map* m, bool normal_ok) {
     m->fail(normal_ok ? "give one of orientation, rpy or normal"
                       : "give either orientation or rpy");
   if (auto q = m->find("orientation")) {
-    if (!q->is_sequence() || q->node().size() != 4)
-      q->fail("expected a quaternion [x, y, z, w], got " + q->describe());
-    const std::vector<Value> c = q->items();
-    const Quat quat(c[3].number(), c[0].number(), c[1].number(), c[2].number());
-    if (std::abs(quat.norm() - 1.0) > 1e-6)
-      q->fail("must be a unit quaternion (norm " + num(quat.norm()) + ")");
-    pose.linear() = quat.normalized().toRotationMatrix();
+    pose.linear() = q->quaternion().toRotationMatrix();
   } else if (auto r = m->find("rpy")) {
     const Vec3 a = r->vec3();
     pose.linear() =
@@ -47,11 +41,6 @@ void add(ObstacleSet* set, const Obstacle& o, const Value& where) {
   } catch (const std::exception& e) {
     where.fail(e.what());
   }
-}
-
-std::string join(const std::string& base, const std::string& path) {
-  if (path.empty() || path[0] == '/' || base.empty()) return path;
-  return base + "/" + path;
 }
 
 }  // namespace
@@ -86,7 +75,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
       m.finish();
       std::vector<Obstacle> parts;
       try {
-        parts = load_urdf_obstacles(join(base, file.string()), joints);
+        parts = load_urdf_obstacles(resolve_path(base, file.string()), joints);
       } catch (const std::exception& e) {
         file.fail(e.what());
       }

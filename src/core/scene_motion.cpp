@@ -23,16 +23,6 @@ Motion::Interpolation read_interpolation(Map* m, Motion::Interpolation fallback)
                        : Motion::Interpolation::kLinear;
 }
 
-Quat read_quaternion(const Value& v) {
-  if (!v.is_sequence() || v.node().size() != 4)
-    v.fail("expected a quaternion [x, y, z, w], got " + v.describe());
-  const std::vector<Value> items = v.items();
-  const Quat q(items[3].number(), items[0].number(), items[1].number(), items[2].number());
-  if (std::abs(q.norm() - 1.0) > 1e-6)
-    v.fail("must be a unit quaternion (norm " + num(q.norm()) + ")");
-  return q.normalized();
-}
-
 // The keyframe's pose relative to the start; a channel a keyframe leaves out keeps its value
 // from the keyframe before.
 Keyframe read_keyframe(const Value& v, const MotionStart& start, const Keyframe& previous) {
@@ -46,16 +36,11 @@ Keyframe read_keyframe(const Value& v, const MotionStart& start, const Keyframe&
   }
   if (start.rotates) {
     if (auto p = m.find("orientation"))
-      k.rotation = read_quaternion(*p) * start.orientation.conjugate();
+      k.rotation = p->quaternion() * start.orientation.conjugate();
     if (auto p = m.find("turns")) k.angle = 2.0 * M_PI * p->number();
   }
   m.finish();
   return k;
-}
-
-std::string join(const std::string& base, const std::string& path) {
-  if (path.empty() || path[0] == '/' || base.empty()) return path;
-  return base + "/" + path;
 }
 
 // A keyframe file: CSV with a header naming its columns (time first; x,y,z or dx,dy,dz;
@@ -65,7 +50,7 @@ std::vector<Keyframe> read_keyframe_file(const Value& v, const MotionStart& star
   Map m(v);
   const std::string name = m.get("file").string();
   m.finish();
-  const std::string path = join(base, name);
+  const std::string path = resolve_path(base, name);
   std::ifstream in(path, std::ios::binary);
   if (!in) v.fail("cannot open the keyframe file " + echo(path));
   std::string text(SceneLimits::max_file_bytes + 1, '\0');

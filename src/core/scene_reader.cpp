@@ -89,6 +89,21 @@ Vec3 Value::vec3() const {
   return Vec3(v[0].number(), v[1].number(), v[2].number());
 }
 
+Quat Value::quaternion() const {
+  if (!is_sequence() || node_.size() != 4)
+    fail("expected a quaternion [x, y, z, w], got " + describe());
+  const std::vector<Value> c = items();
+  const Quat q(c[3].number(), c[0].number(), c[1].number(), c[2].number());
+  if (std::abs(q.norm() - 1.0) > 1e-6)
+    fail("must be a unit quaternion (norm " + num(q.norm()) + ")");
+  return q.normalized();
+}
+
+std::string resolve_path(const std::string& base, const std::string& path) {
+  if (path.empty() || path[0] == '/' || base.empty()) return path;
+  return base + "/" + path;
+}
+
 Vec3 Value::nonzero_vec3() const {
   const Vec3 v = vec3();
   if (!(v.norm() > 1e-12)) fail("must not be the zero vector");

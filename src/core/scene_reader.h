@@ -49,6 +49,8 @@ class Value {
   bool boolean() const;
   std::string string() const;
   Vec3 vec3() const;
+  // [x, y, z, w], of unit norm to 1e-6; normalised.
+  Quat quaternion() const;
   // A direction: scaled so that its largest component is +-1 (the norm of [1e200, 0, 0] would
   // overflow).
   Vec3 nonzero_vec3() const;
@@ -86,6 +88,10 @@ class Map {
 Section read_section(Map* rod);
 // The `shape` of a rod (scene_material.cpp).
 RodShape read_shape(const Value& v);
+
+// A path from the scene file: relative ones are relative to `base`, the scene file's folder
+// ("" for a scene given as text: the current directory).
+std::string resolve_path(const std::string& base, const std::string& path);
 
 // Where a driven item starts, for keyframes given as absolute poses, and what it may do.
 struct MotionStart {

@@ -149,11 +149,7 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   auto move_holders = [&](double t) {
     for (const Held& g : held) {
       if (!g.motion) continue;
-      const Motion::Sample s = g.motion->at(t);
-      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      pose.linear() = s.rotation.toRotationMatrix() * g.start.linear();
-      pose.translation() = g.start.translation() + s.displacement;
-      hold(*g.rod, g.grasp, pose);
+      hold(*g.rod, g.grasp, g.motion->pose_at(t, g.start));
     }
   };
   const bool any_output = options.csv || options.reactions || options.energies;

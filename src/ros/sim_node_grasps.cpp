@@ -188,10 +188,7 @@ void SimNode::drive_scripted(double t, double h) {
     // Past the last keyframe the goal stays where the last call put it: the holder settles there
     // and costs nothing more.
     if (t >= w.script->end_time()) continue;
-    const corde::Motion::Sample m = w.script->at(t + h);
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = m.rotation.toRotationMatrix() * w.script_start.linear();
-    pose.translation() = w.script_start.translation() + m.displacement;
+    const Eigen::Isometry3d pose = w.script->pose_at(t + h, w.script_start);
     grasps_.set_goal(*s.first, t, pose * w.script_offset_inv, h);
   }
 }

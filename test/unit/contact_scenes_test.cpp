@@ -3,15 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <filesystem>
 
 #include "corde_sim/scene.h"
 #include "corde_sim/world.h"
-
-#ifndef CORDE_SIM_SOURCE_DIR
-#define CORDE_SIM_SOURCE_DIR \
-  (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string())
-#endif
 
 namespace corde {
 namespace {

@@ -3,18 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
 #include <random>
 
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/segment_distance.h"
 #include "corde_sim/world.h"
-
-#ifndef CORDE_SIM_SOURCE_DIR
-#define CORDE_SIM_SOURCE_DIR \
-  (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string())
-#endif
 
 namespace corde {
 namespace {

@@ -7,41 +7,20 @@
 #include <cmath>
 #include <memory>
 
-#include "corde_sim/rod_shape.h"
 #include "corde_sim/statics.h"
 #include "corde_sim/world.h"
+#include "validation_util.h"
 
 namespace corde {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Rod cantilever(int elements) {
-  Material m;
-  m.youngs_modulus = m.stretch_modulus = 1e7;
-  m.shear_modulus = 1e7 / 3.0;
-  m.density = 1000.0;
-  const double r = 0.01;
-  m.kappa = m.shear_modulus * kPi * r * r;
-  RodSpec spec;
-  spec.elements = elements;
-  spec.section = make_section(m, r);
-  spec.shape.direction = Vec3::UnitX();
-  spec.shape.length = 1.0;
-  return build_rod(spec);
-}
+// The example rod of docs/validation_references.md (1 m, r = 1 cm, E = 1e7) along x.
+Rod cantilever(int elements) { return val::straight_rod(val::example_material(), elements); }
 
 void clamp_start(Rod* rod, bool ghost) {
-  rod->add_node_drive(NodeDrive{NodeDrive::Kind::kFixed, 0, rod->positions()[0]});
-  if (ghost) {
-    rod->ghost_start().active = true;
-    rod->ghost_start().frame = rod->ghost_start().origin = rod->orientations()[0];
-  } else {
-    SegmentDrive d;
-    d.segment = 0;
-    d.origin = rod->orientations()[0];
-    rod->add_segment_drive(d);
-  }
+  val::clamp_start(rod, ghost ? val::Clamp::kGhost : val::Clamp::kNatural);
 }
 
 // Total weight and loads (force) and their moment about p, dead loads at time t.

@@ -16,12 +16,6 @@
 #include "corde_sim/scene_runner.h"
 #include "writhe.h"
 
-#ifndef CORDE_SIM_SOURCE_DIR
-// Fallback when built without CMake's definition: this file is <root>/test/unit/.
-#define CORDE_SIM_SOURCE_DIR \
-  (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string())
-#endif
-
 namespace corde {
 namespace {
 
