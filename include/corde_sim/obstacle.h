@@ -36,6 +36,10 @@ struct Obstacle {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // obstacle frame in the world
   double friction = 0.5;                                   // Coulomb coefficient with rods
   bool moving = false;  // its pose may change while the scene runs (robot links)
+  // A moving obstacle's velocity (world frame): of its frame's origin and its angular velocity.
+  // Contacts constrain the rod's velocity relative to the obstacle's surface point.
+  Vec3 linear_velocity = Vec3::Zero();
+  Vec3 angular_velocity = Vec3::Zero();
 };
 
 // Closest points between a rod segment's axis [a, b] and an obstacle's surface. Always
@@ -73,6 +77,10 @@ class ObstacleSet {
   // Moves obstacle i (its bounding boxes are refreshed). Throws std::out_of_range for a bad
   // index, std::invalid_argument for a pose as add() refuses.
   void set_pose(int i, const Eigen::Isometry3d& pose);
+  // Moves obstacle i and sets its velocity (world frame: origin's linear and angular velocity).
+  // Throws as set_pose, and std::invalid_argument for a non-finite velocity.
+  void set_pose(int i, const Eigen::Isometry3d& pose, const Vec3& linear_velocity,
+                const Vec3& angular_velocity);
 
   // Every obstacle whose surface is within `reach` of the segment's axis [a, b]: appends one
   // closest-point pair per such obstacle to `out` (with `which` the obstacle's index; `which` may

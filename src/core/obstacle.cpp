@@ -328,6 +328,16 @@ void ObstacleSet::set_pose(int i, const Eigen::Isometry3d& pose) {
   refresh_world_box(&e);
 }
 
+void ObstacleSet::set_pose(int i, const Eigen::Isometry3d& pose, const Vec3& linear_velocity,
+                           const Vec3& angular_velocity) {
+  Entry& e = impl_->entries.at(i);
+  if (!linear_velocity.allFinite() || !angular_velocity.allFinite())
+    throw std::invalid_argument(label(e.ob, i) + ": the velocity is not finite");
+  set_pose(i, pose);
+  e.ob.linear_velocity = linear_velocity;
+  e.ob.angular_velocity = angular_velocity;
+}
+
 namespace {
 
 // A contact from the axis point p and its analytic local answer (primitive frame).
