@@ -33,6 +33,12 @@ std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
                                            const std::map<std::string, double>& joint_values = {});
 
+// A file name as URDF files (and the scene key `urdf`) give them: `package://<pkg>/<path>` (the
+// package's folder looked up as for meshes above, starting at `base_dir`), `file://<path>`, an
+// absolute path, or a path relative to `base_dir` (empty: the current folder). Throws
+// std::runtime_error naming the name when the package is not found.
+std::string resolve_resource_path(const std::string& uri, const std::string& base_dir);
+
 // Triangles of a mesh file (STL, DAE, OBJ, ... : what assimp reads), every node's transform
 // applied, then scaled per axis. Throws std::runtime_error naming the file.
 TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale = Vec3::Ones());

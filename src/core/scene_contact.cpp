@@ -75,7 +75,9 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
       m.finish();
       std::vector<Obstacle> parts;
       try {
-        parts = load_urdf_obstacles(resolve_path(base, file.string()), joints);
+        // package:// and file:// names as in URDF files; plain relative ones from the scene's
+        // folder.
+        parts = load_urdf_obstacles(resolve_resource_path(file.string(), base), joints);
       } catch (const std::exception& e) {
         file.fail(e.what());
       }

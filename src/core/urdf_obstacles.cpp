@@ -105,23 +105,32 @@ fs::path find_package_dir(const std::string& pkg, const fs::path& start) {
 }
 
 fs::path resolve_mesh(const std::string& uri, const fs::path& base, const std::string& where) {
+  try {
+    return resolve_resource_path(uri, base.string());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(where + ": mesh " + e.what());
+  }
+}
+
+}  // namespace
+
+std::string resolve_resource_path(const std::string& uri, const std::string& base_dir) {
   const std::string kPackage = "package://", kFile = "file://";
+  const fs::path base = base_dir.empty() ? fs::current_path() : fs::path(base_dir);
   if (uri.rfind(kPackage, 0) == 0) {
     const std::string rest = uri.substr(kPackage.size());
     const size_t slash = rest.find('/');
     const std::string pkg = rest.substr(0, slash);
     const fs::path dir = find_package_dir(pkg, base);
     if (dir.empty()) {
-      throw std::runtime_error(where + ": mesh '" + uri + "': package '" + pkg +
-                               "' not found above " + base.string() + " nor in ROS_PACKAGE_PATH");
+      throw std::runtime_error("'" + uri + "': package '" + pkg + "' not found above " +
+                               base.string() + " nor in ROS_PACKAGE_PATH");
     }
-    return slash == std::string::npos ? dir : dir / rest.substr(slash + 1);
+    return (slash == std::string::npos ? dir : dir / rest.substr(slash + 1)).string();
   }
   fs::path p(uri.rfind(kFile, 0) == 0 ? uri.substr(kFile.size()) : uri);
-  return p.is_absolute() ? p : base / p;
+  return (p.is_absolute() ? p : base / p).string();
 }
-
-}  // namespace
 
 TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale) {
   std::error_code ec;

@@ -211,3 +211,26 @@ TEST_F(UrdfObstacles, MeshFileScaleMirrors) {
 
 }  // namespace
 }  // namespace corde
+
+// File names as the scene key `urdf` takes them: package:// found from the scene's folder (the
+// package's root holds package.xml naming corde_sim), file://, absolute and relative names.
+TEST(ResolveResourcePath, PackageFileAbsoluteRelative) {
+  namespace fs = std::filesystem;
+  const std::string root = CORDE_SIM_SOURCE_DIR;
+  const std::string scenes = root + "/config/scenes";
+  const std::string got =
+      corde::resolve_resource_path("package://corde_sim/urdf/table_with_bar.urdf", scenes);
+  EXPECT_TRUE(fs::equivalent(got, root + "/urdf/table_with_bar.urdf")) << got;
+  EXPECT_EQ(corde::resolve_resource_path("file:///a/b.urdf", scenes), "/a/b.urdf");
+  EXPECT_EQ(corde::resolve_resource_path("/a/b.urdf", scenes), "/a/b.urdf");
+  EXPECT_EQ(corde::resolve_resource_path("../../urdf/x.urdf", scenes),
+            scenes + "/../../urdf/x.urdf");
+  try {
+    corde::resolve_resource_path("package://no_such_package_here/x.urdf", scenes);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("package 'no_such_package_here' not found"),
+              std::string::npos)
+        << e.what();
+  }
+}
