@@ -9,7 +9,8 @@
 //
 // Contacts (below): BM_WorldStepNoContact (World::step without anything to collide, against
 // BM_RodStep/100), BM_RopeOnFloorSelfContact (a 1 m rope coiled on a floor, self contact on: time
-// per World::step, the step and the real-time factor) and BM_ContactScaling/N/self.
+// per World::step, the step and the real-time factor), BM_ContactScaling/N/self, and two shipped
+// scenes in their settled state: BM_RodStack (rod-rod contact) and BM_RopePile (self contact).
 //
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -22,6 +23,7 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -297,6 +299,45 @@ void BM_ContactScaling(benchmark::State& state) {
 BENCHMARK(BM_ContactScaling)
     ->ArgsProduct({{50, 100, 200, 500, 1000, 2000}, {0, 1}})
     ->Unit(benchmark::kMicrosecond);
+
+// A shipped scene run to `settle` seconds once (then kept: Google Benchmark calls a benchmark
+// several times, and the state changes little once at rest), or null when the file is missing.
+std::unique_ptr<corde::Scene> settled_scene(const char* file, double settle) {
+  try {
+    auto scene = std::make_unique<corde::Scene>(
+        corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/" + file));
+    scene->world.step(static_cast<long>(settle / scene->world.time_step + 0.5));
+    return scene;
+  } catch (const std::exception&) {
+    return nullptr;
+  }
+}
+
+int elements(const corde::World& world) {
+  int n = 0;
+  for (const Rod& rod : world.rods()) n += rod.num_segments();
+  return n;
+}
+
+// config/scenes/rod_stack.yaml after 0.6 s: six rods of 10 elements stacked crosswise on the
+// floor, rod-rod contact (8 crossings carrying load, 30 floor contacts).
+void BM_RodStack(benchmark::State& state) {
+  static const std::unique_ptr<corde::Scene> scene = settled_scene("rod_stack.yaml", 0.6);
+  if (scene == nullptr) return state.SkipWithError("config/scenes/rod_stack.yaml not found");
+  run_world(state, scene->world, elements(scene->world));
+}
+
+BENCHMARK(BM_RodStack)->Unit(benchmark::kMicrosecond);
+
+// config/scenes/rope_pile.yaml after 2.5 s: the rope of 100 elements lowered into a pile of loops
+// on the floor, self contact (about 20 self contacts carrying load; the solve uses all 30 sweeps).
+void BM_RopePile(benchmark::State& state) {
+  static const std::unique_ptr<corde::Scene> scene = settled_scene("rope_pile.yaml", 2.5);
+  if (scene == nullptr) return state.SkipWithError("config/scenes/rope_pile.yaml not found");
+  run_world(state, scene->world, elements(scene->world));
+}
+
+BENCHMARK(BM_RopePile)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
