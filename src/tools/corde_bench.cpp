@@ -11,6 +11,9 @@
 // BM_RodStep/100), BM_RopeOnFloorSelfContact (a 1 m rope coiled on a floor, self contact on: time
 // per World::step, the step and the real-time factor), BM_ContactScaling/N/self, and two shipped
 // scenes in their settled state: BM_RodStack (rod-rod contact) and BM_RopePile (self contact).
+// BM_OverhandKnot: config/scenes/overhand_knot.yaml (N = 100, self contact with friction) pulled
+// until the knot is tight, then timed with the ends held; it also reports the share of the step
+// spent in the contact stage.
 //
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -20,6 +23,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -28,6 +32,7 @@
 #include <utility>
 #include <vector>
 
+#include "corde_sim/grasp.h"
 #include "corde_sim/material.h"
 #include "corde_sim/obstacle.h"
 #include "corde_sim/rod.h"
@@ -260,10 +265,12 @@ corde::Scene rope_on_floor(int n, bool self) {
 
 // Time per World::step (Time, wall), the step (step_us), the real-time factor (simulated seconds
 // per wall second, single thread) and the contacts of the last step.
-void run_world(benchmark::State& state, corde::World& world, int n) {
+// `step` advances the world by one step (default: World::step).
+template <typename Step>
+void run_world(benchmark::State& state, corde::World& world, int n, Step step) {
   const auto start = std::chrono::steady_clock::now();
   for (auto _ : state) {
-    world.step();
+    step();
     benchmark::DoNotOptimize(world.rods()[0].positions().data());
     benchmark::ClobberMemory();
   }
@@ -278,6 +285,10 @@ void run_world(benchmark::State& state, corde::World& world, int n) {
     state.counters["max_pen_um"] = world.contacts()->stats().max_penetration * 1e6;
   }
   if (!world.finite()) state.SkipWithError("the rope blew up (non-finite state)");
+}
+
+void run_world(benchmark::State& state, corde::World& world, int n) {
+  run_world(state, world, n, [&] { world.step(); });
 }
 
 // The scene: a 1 m rope of 100 elements coiled on the floor, self contact on.
@@ -338,6 +349,70 @@ void BM_RopePile(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RopePile)->Unit(benchmark::kMicrosecond);
+
+// The knot scene, its ends pulled 0.14 m each in 3 s (as far as the scene pulls in 47 s at 3 mm/s:
+// the loop about 3 cm across, the strands pressed together along the braid), then timed while the
+// grasps hold the ends there (the knot under tension, its contacts active), the grasps set before
+// each step as corde_run does. contact_share: the fraction of the step in the contact stage
+// (ContactSystem::solve: detection and solve), timed on as many further steps (at most 2000);
+// sweeps: the Gauss-Seidel sweeps of the last step.
+void BM_OverhandKnot(benchmark::State& state) {
+  const std::string motion = "=[{time: 3, displacement: [%g, 0, 0]}]";
+  char right[100], left[100];
+  std::snprintf(right, sizeof right, motion.c_str(), 0.14);
+  std::snprintf(left, sizeof left, motion.c_str(), -0.14);
+  corde::Scene scene;
+  try {
+    scene =
+        corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/overhand_knot.yaml",
+                          {std::string("grasps.right.keyframes") + right,
+                           std::string("grasps.left.keyframes") + left});
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  corde::World& world = scene.world;
+  Rod& rod = world.rods()[0];
+  struct Held {
+    corde::Grasp grasp;
+    Eigen::Isometry3d start;
+    const corde::Motion* motion;
+  };
+  std::vector<Held> held;
+  for (const corde::GraspSpec& spec : scene.grasps) {
+    const Eigen::Isometry3d pose = corde::segment_pose(rod, corde::grasp_segment(rod, spec));
+    held.push_back({corde::make_grasp(rod, spec, pose), pose, spec.motion.get()});
+  }
+  auto step = [&] {
+    for (const Held& g : held)
+      corde::hold(rod, g.grasp, g.motion->pose_at(world.time() + world.time_step, g.start));
+    world.step();
+  };
+  while (world.time() < 3.5) step();
+  run_world(state, world, 100, step);
+  // The contact stage alone, on as many further steps (at most 2000).
+  using Clock = std::chrono::steady_clock;
+  Clock::duration contact{}, total{};
+  corde::ContactSystem probe;
+  const long probe_steps = std::min<long>(2000, static_cast<long>(state.iterations()));
+  for (long k = 0; k < probe_steps; ++k) {
+    const auto t0 = Clock::now();
+    step();
+    const auto t1 = Clock::now();
+    // The same contact stage on the state the step left (forces first, as in the step).
+    for (Rod& r : world.rods()) r.compute_forces(world.time(), world.gravity);
+    const auto t2 = Clock::now();
+    probe.solve(world, world.time_step);
+    contact += Clock::now() - t2;
+    total += t1 - t0;
+  }
+  state.counters["sweeps"] = world.contacts() ? world.contacts()->stats().iterations : 0;
+  if (total.count() > 0)
+    state.counters["contact_share"] = std::chrono::duration<double>(contact).count() /
+                                      std::chrono::duration<double>(total).count();
+}
+
+BENCHMARK(BM_OverhandKnot)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -34,7 +34,7 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
   for (const char* want :
        {"default", "coiling_50", "coiling_100", "coiling_1000", "preshaped_spring",
         "preshaped_wire", "thread", "helical_buckling", "plectoneme", "lift_and_lay",
-        "rope_pendulum_air", "drape_table", "rod_stack", "rope_pile"})
+        "rope_pendulum_air", "drape_table", "rod_stack", "rope_pile", "overhand_knot"})
     EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
 }
 
