@@ -138,7 +138,7 @@ void print(const char* what, const Result& r) {
       r.active, r.self_active, r.normal_force, r.kinetic, r.elastic);
 }
 
-// The shipped scene with self contact, run once for the three tests (about 8 s).
+// The shipped scene with self contact, run once for the three tests (about 3 s of CPU).
 const Result& with_contact() {
   static const Result r = [] {
     Result x = run(true);
