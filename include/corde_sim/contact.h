@@ -79,6 +79,8 @@ class ContactSystem {
  private:
   void detect(World& world, double h);
   void detect_rod_pairs(World& world, double h);
+  bool pair_list_valid(const World& world) const;
+  void build_pair_list(const World& world);
   void warm_start();
 
   std::vector<Contact> contacts_;
@@ -96,6 +98,21 @@ class ContactSystem {
   std::vector<CellEntry> cells_;
   std::vector<std::pair<int, int>> items_;  // (rod, segment) of a broad-phase item
   std::vector<Eigen::AlignedBox3d> boxes_;
+  std::vector<double> grow_;  // per item: how far its box reaches beyond the segment
+  // The rod-pair broad phase, kept across steps (a Verlet list): the item pairs whose boxes, grown
+  // by list_margin_, overlapped when it was built. It holds every pair whose boxes overlap as long
+  // as no item's nodes have moved, plus its box's growth, by more than list_margin_ since then.
+  std::vector<std::pair<int, int>> pair_list_;
+  std::vector<std::vector<Vec3>> list_positions_;  // per rod: the nodes when it was built
+  std::vector<double> list_grow_;                  // per item: grow_ when it was built
+  std::vector<std::uint64_t> list_rods_;           // per rod: its options and size then
+  std::vector<int> list_skip_;                     // per item: its neighbours skipped then
+  double list_margin_ = 0.0;
+  struct Overlap {  // a listed pair whose boxes overlap this step, in the grid's order
+    std::uint64_t cell;
+    int i, j;
+  };
+  std::vector<Overlap> overlaps_;
   // The last step's impulses by pair key, sorted (kept, not reallocated, across steps).
   struct Previous {
     std::uint64_t key;

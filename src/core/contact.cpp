@@ -221,9 +221,12 @@ void ContactSystem::detect(World& world, double h) {
     stats_.max_penetration = std::max(stats_.max_penetration, -c.gap);
 }
 
-// Rod-rod and self contact: segment boxes (grown by what each can travel in the step) hashed into
-// a uniform grid no finer than the largest box, so each box covers at most 8 cells and the cost is
-// linear in the number of segments; pairs are tested once, in the first cell both cover.
+// Rod-rod and self contact. Each segment's box is grown by what it can travel in the step; the
+// pairs whose boxes overlap go to the narrow phase in the order of a uniform grid no finer than the
+// largest box (each box covers at most 8 cells, pairs are visited in the first cell both cover).
+// The grid itself is only built now and then (build_pair_list): the pairs it finds with the boxes
+// grown by a margin stay valid for the following steps until some segment has moved, or its box
+// has grown, by more than that margin.
 void ContactSystem::detect_rod_pairs(World& world, double h) {
   auto& rods = world.rods();
   const ContactSettings& cs = world.contact;
@@ -237,6 +240,7 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
   if (!any_self && with_rods < 2) return;
   items_.clear();
   boxes_.clear();
+  grow_.clear();
   double cell = 0.0;
   for (int r = 0; r < nr; ++r) {
     const Rod& rod = rods[r];
@@ -253,9 +257,129 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
       cell = std::max(cell, box.sizes().maxCoeff());
       items_.push_back({r, s});
       boxes_.push_back(box);
+      grow_.push_back(grow);
     }
   }
   if (items_.size() < 2 || !(cell > 0.0) || !std::isfinite(cell)) return;
+  if (!pair_list_valid(world)) build_pair_list(world);
+  const double inv = 1.0 / cell;
+  auto lo_cell = [&](const Eigen::AlignedBox3d& b) {
+    return Eigen::Vector3d((b.min() * inv).array().floor());
+  };
+  // The listed pairs whose boxes overlap, sorted as the grid would visit them: by the first cell
+  // both cover, then by item (the narrow phase's order is the Gauss-Seidel order of the solve).
+  overlaps_.clear();
+  for (const auto& [i, j] : pair_list_) {
+    const Eigen::AlignedBox3d &bi = boxes_[i], &bj = boxes_[j];
+    if (!bi.intersects(bj)) continue;
+    const Vec3 first = lo_cell(bi).cwiseMax(lo_cell(bj));
+    overlaps_.push_back(
+        {cell_key(static_cast<std::int64_t>(first.x()), static_cast<std::int64_t>(first.y()),
+                  static_cast<std::int64_t>(first.z())),
+         i, j});
+  }
+  std::sort(overlaps_.begin(), overlaps_.end(), [](const Overlap& a, const Overlap& b) {
+    return a.cell != b.cell ? a.cell < b.cell : a.i != b.i ? a.i < b.i : a.j < b.j;
+  });
+  for (const Overlap& o : overlaps_) {
+    const auto [ra, sa] = items_[o.i];
+    const auto [rb, sb] = items_[o.j];
+    const Rod &rod_a = rods[ra], &rod_b = rods[rb];
+    ++stats_.candidate_pairs;
+    const auto& xa = rod_a.positions();
+    const auto& xb = rod_b.positions();
+    const SegmentPair sp = closest_points(xa[sa], xa[sa + 1], xb[sb], xb[sb + 1]);
+    const double ra_ = rod_a.section().radius, rb_ = rod_b.section().radius;
+    const Vec3 pa = xa[sa] + sp.s * (xa[sa + 1] - xa[sa]);
+    const Vec3 pb = xb[sb] + sp.t * (xb[sb + 1] - xb[sb]);
+    const Vec3 d = pa - pb;
+    const double dist = d.norm();
+    const auto& va = velocity_[ra];
+    const auto& vb = velocity_[rb];
+    const double closing = (va[sa].norm() + va[sa + 1].norm() + vb[sb].norm() + vb[sb + 1].norm());
+    const double gap = dist - ra_ - rb_;
+    if (gap > cs.skin * (ra_ + rb_) + h * closing) continue;
+    Contact c;
+    c.rod_a = ra;
+    c.seg_a = sa;
+    c.s_a = sp.s;
+    c.rod_b = rb;
+    c.seg_b = sb;
+    c.s_b = sp.t;
+    c.normal = dist > 1e-12 * (ra_ + rb_) ? Vec3(d / dist) : any_perpendicular(xa[sa + 1] - xa[sa]);
+    c.point = pb + rb_ * c.normal;
+    c.gap = gap;
+    const double ma =
+        rod_a.contact_options().friction >= 0.0 ? rod_a.contact_options().friction : cs.friction;
+    const double mb =
+        rod_b.contact_options().friction >= 0.0 ? rod_b.contact_options().friction : cs.friction;
+    c.mu = std::sqrt(ma * mb);
+    contacts_.push_back(c);
+  }
+}
+
+namespace {
+
+// What the pair list depends on besides positions: a rod's contact flags and its size.
+std::uint64_t list_signature(const Rod& rod) {
+  const ContactOptions& o = rod.contact_options();
+  return static_cast<std::uint64_t>(rod.num_segments()) << 2 | (o.self ? 1u : 0u) |
+         (o.rods ? 2u : 0u);
+}
+
+// Segments of a rod closer along it than this to segment s are its neighbours (no self contact).
+int neighbour_skip(const Rod& rod, int s) {
+  return 1 + static_cast<int>(std::ceil(0.8 * M_PI * rod.section().radius / rod.rest_lengths()[s]));
+}
+
+}  // namespace
+
+// The list holds every pair whose boxes overlap now if each item's box lies inside its box at the
+// build grown by the margin: its nodes moved by at most D per axis since, so that holds while
+// D + grow now <= grow then + margin.
+bool ContactSystem::pair_list_valid(const World& world) const {
+  const auto& rods = world.rods();
+  if (list_rods_.size() != rods.size() || list_grow_.size() != items_.size()) return false;
+  for (size_t r = 0; r < rods.size(); ++r)
+    if (list_signature(rods[r]) != list_rods_[r]) return false;
+  for (size_t k = 0; k < items_.size(); ++k) {
+    const auto [r, s] = items_[k];
+    const auto& x = rods[r].positions();
+    const auto& x0 = list_positions_[r];
+    const double moved = std::max((x[s] - x0[s]).cwiseAbs().maxCoeff(),
+                                  (x[s + 1] - x0[s + 1]).cwiseAbs().maxCoeff());
+    if (!(moved + grow_[k] <= list_grow_[k] + list_margin_)) return false;
+    if (neighbour_skip(rods[r], s) != list_skip_[k]) return false;
+  }
+  return true;
+}
+
+// The pairs of items whose boxes, grown by the margin (the largest radius), overlap: a uniform
+// grid no finer than the largest grown box, so the cost is linear in the number of segments;
+// pairs are tested once, in the first cell both cover. Neighbours along a rod, and pairs of rods
+// that do not both take part in rod contact, are left out.
+void ContactSystem::build_pair_list(const World& world) {
+  const auto& rods = world.rods();
+  list_margin_ = 0.0;
+  for (const auto& [r, s] : items_) list_margin_ = std::max(list_margin_, rods[r].section().radius);
+  list_rods_.resize(rods.size());
+  list_positions_.resize(rods.size());
+  for (size_t r = 0; r < rods.size(); ++r) {
+    list_rods_[r] = list_signature(rods[r]);
+    list_positions_[r] = rods[r].positions();
+  }
+  list_grow_ = grow_;
+  list_skip_.resize(items_.size());
+  for (size_t k = 0; k < items_.size(); ++k)
+    list_skip_[k] = neighbour_skip(rods[items_[k].first], items_[k].second);
+  pair_list_.clear();
+  auto grown = [&](int k) {
+    return Eigen::AlignedBox3d(boxes_[k].min().array() - list_margin_,
+                               boxes_[k].max().array() + list_margin_);
+  };
+  double cell = 0.0;
+  for (size_t k = 0; k < items_.size(); ++k)
+    cell = std::max(cell, grown(static_cast<int>(k)).sizes().maxCoeff());
   const double inv = 1.0 / cell;
   auto lo_cell = [&](const Eigen::AlignedBox3d& b) {
     return Eigen::Vector3d((b.min() * inv).array().floor());
@@ -265,7 +389,8 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
   };
   cells_.clear();
   for (int i = 0; i < static_cast<int>(items_.size()); ++i) {
-    const Vec3 lo = lo_cell(boxes_[i]), hi = hi_cell(boxes_[i]);
+    const Eigen::AlignedBox3d b = grown(i);
+    const Vec3 lo = lo_cell(b), hi = hi_cell(b);
     for (double cx = lo.x(); cx <= hi.x(); ++cx)
       for (double cy = lo.y(); cy <= hi.y(); ++cy)
         for (double cz = lo.z(); cz <= hi.z(); ++cz)
@@ -282,9 +407,8 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     for (size_t p = g0; p < g1; ++p)
       for (size_t q = p + 1; q < g1; ++q) {
         const int i = cells_[p].item, j = cells_[q].item;
-        const Eigen::AlignedBox3d &bi = boxes_[i], &bj = boxes_[j];
+        const Eigen::AlignedBox3d bi = grown(i), bj = grown(j);
         if (!bi.intersects(bj)) continue;
-        // Only in the first cell both cover (the lowest corner of their common cells).
         const Vec3 first = lo_cell(bi).cwiseMax(lo_cell(bj));
         if (cell_key(static_cast<std::int64_t>(first.x()), static_cast<std::int64_t>(first.y()),
                      static_cast<std::int64_t>(first.z())) != cells_[p].cell)
@@ -293,46 +417,12 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
         const auto [rb, sb] = items_[j];
         const Rod &rod_a = rods[ra], &rod_b = rods[rb];
         if (ra == rb) {
-          if (!rod_a.contact_options().self) continue;
           // Neighbours along the rod touch by construction: skip those within about a diameter.
-          const double l = rod_a.rest_lengths()[sa];
-          const int skip = 1 + static_cast<int>(std::ceil(0.8 * M_PI * rod_a.section().radius / l));
-          if (std::abs(sa - sb) <= skip) continue;
+          if (!rod_a.contact_options().self || std::abs(sa - sb) <= list_skip_[i]) continue;
         } else if (!rod_a.contact_options().rods || !rod_b.contact_options().rods) {
           continue;
         }
-        ++stats_.candidate_pairs;
-        const auto& xa = rod_a.positions();
-        const auto& xb = rod_b.positions();
-        const SegmentPair sp = closest_points(xa[sa], xa[sa + 1], xb[sb], xb[sb + 1]);
-        const double ra_ = rod_a.section().radius, rb_ = rod_b.section().radius;
-        const Vec3 pa = xa[sa] + sp.s * (xa[sa + 1] - xa[sa]);
-        const Vec3 pb = xb[sb] + sp.t * (xb[sb + 1] - xb[sb]);
-        const Vec3 d = pa - pb;
-        const double dist = d.norm();
-        const auto& va = velocity_[ra];
-        const auto& vb = velocity_[rb];
-        const double closing =
-            (va[sa].norm() + va[sa + 1].norm() + vb[sb].norm() + vb[sb + 1].norm());
-        const double gap = dist - ra_ - rb_;
-        if (gap > cs.skin * (ra_ + rb_) + h * closing) continue;
-        Contact c;
-        c.rod_a = ra;
-        c.seg_a = sa;
-        c.s_a = sp.s;
-        c.rod_b = rb;
-        c.seg_b = sb;
-        c.s_b = sp.t;
-        c.normal =
-            dist > 1e-12 * (ra_ + rb_) ? Vec3(d / dist) : any_perpendicular(xa[sa + 1] - xa[sa]);
-        c.point = pb + rb_ * c.normal;
-        c.gap = gap;
-        const double ma = rod_a.contact_options().friction >= 0.0 ? rod_a.contact_options().friction
-                                                                  : cs.friction;
-        const double mb = rod_b.contact_options().friction >= 0.0 ? rod_b.contact_options().friction
-                                                                  : cs.friction;
-        c.mu = std::sqrt(ma * mb);
-        contacts_.push_back(c);
+        pair_list_.push_back({i, j});
       }
     g0 = g1;
   }

@@ -13,7 +13,9 @@
 // scenes in their settled state: BM_RodStack (rod-rod contact) and BM_RopePile (self contact).
 // BM_OverhandKnot: config/scenes/overhand_knot.yaml (N = 100, self contact with friction) pulled
 // until the knot is tight, then timed with the ends held; it also reports the share of the step
-// spent in the contact stage.
+// spent in the contact stage. BM_PlectonemeContact/self (the shipped scene plectoneme_contact.yaml
+// from start to end, 100 elements, self contact on or off: mean time per World::step over the whole
+// run, and over the steps before the first contact and from it on).
 //
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
@@ -413,6 +415,49 @@ void BM_OverhandKnot(benchmark::State& state) {
 }
 
 BENCHMARK(BM_OverhandKnot)->Unit(benchmark::kMicrosecond);
+// The paper's Fig. 1 with self contact, config/scenes/plectoneme_contact.yaml as shipped (100
+// elements, 45 s, 430233 steps): one benchmark iteration is one World::step, and the run is the
+// whole scene, so Time is the mean over it and real_time_x the scene's real-time factor.
+// free_us and contact_us split it at 29 s, about when the loop lands on itself (first_contact_s:
+// the first step that found a contact). Argument 0: self contact off, the same scene.
+void BM_PlectonemeContact(benchmark::State& state) {
+  corde::Scene scene = corde::load_scene(
+      std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/plectoneme_contact.yaml",
+      {state.range(0) != 0 ? "rods.0.contact={self: true}" : "rods.0.contact={self: false}"});
+  corde::World& world = scene.world;
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  auto split = start;
+  long split_step = -1, steps = 0;
+  double first_contact = -1.0;
+  for (auto _ : state) {
+    world.step();
+    ++steps;
+    if (split_step < 0 && world.time() >= 29.0) {
+      split = Clock::now();
+      split_step = steps;
+    }
+    if (first_contact < 0.0 && world.contacts() && world.contacts()->stats().contacts > 0)
+      first_contact = world.time();
+  }
+  const auto end = Clock::now();
+  report(state, 100, end - start);
+  const double secs = std::chrono::duration<double>(end - start).count();
+  state.counters["step_us"] = world.time_step * 1e6;
+  state.counters["real_time_x"] = secs > 0 ? world.time() / secs : 0.0;
+  if (split_step > 0 && split_step < steps) {
+    state.counters["free_us"] = std::chrono::duration<double, std::micro>(split - start).count() /
+                                static_cast<double>(split_step);
+    state.counters["contact_us"] = std::chrono::duration<double, std::micro>(end - split).count() /
+                                   static_cast<double>(steps - split_step);
+  }
+  if (world.contacts()) state.counters["contacts"] = world.contacts()->stats().contacts;
+  state.counters["first_contact_s"] = first_contact;
+  if (!world.finite()) state.SkipWithError("the rod blew up (non-finite state)");
+}
+
+// 430233 steps of 1.046e-4 s: the scene's 45 s.
+BENCHMARK(BM_PlectonemeContact)->Arg(1)->Arg(0)->Iterations(430233)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
