@@ -2,6 +2,7 @@
 // kinematics at given joint values. Meshes are read with assimp.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <map>
 #include <string>
 #include <vector>
@@ -32,6 +33,23 @@ std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
 // name the document "<urdf string>".
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
                                            const std::map<std::string, double>& joint_values = {});
+
+// One collision element with the link it belongs to, for following a moving robot: the
+// obstacle's pose is link pose * in_link (the collision origin); `obstacle` is posed at the
+// root link's identity with every joint at 0 (marked `moving` behind a movable joint).
+struct UrdfCollision {
+  std::string link;
+  Eigen::Isometry3d in_link = Eigen::Isometry3d::Identity();
+  Obstacle obstacle;
+};
+
+// Every collision element of the URDF text `xml`, checked and read like parse_urdf_obstacles
+// (same names, same errors), with messages naming the document `doc` (e.g. "parameter
+// robot_description"). `link_names`, if given, receives the names of all the robot's links.
+std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
+                                                 const std::string& base_dir,
+                                                 const std::string& doc,
+                                                 std::vector<std::string>* link_names = nullptr);
 
 // Triangles of a mesh file (STL, DAE, OBJ, ... : what assimp reads), every node's transform
 // applied, then scaled per axis. Throws std::runtime_error naming the file.

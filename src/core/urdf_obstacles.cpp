@@ -170,9 +170,9 @@ TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale) {
 
 namespace {
 
-std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
-                                   const fs::path& base,
-                                   const std::map<std::string, double>& joint_values) {
+std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, const std::string& doc,
+                                         const fs::path& base,
+                                         const std::map<std::string, double>& joint_values) {
   for (const auto& [name, value] : joint_values) {
     if (!model.getJoint(name)) {
       throw std::runtime_error(doc + ": joint '" + name +
@@ -182,7 +182,7 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
       throw std::runtime_error(doc + ": joint '" + name + "': the value is not finite");
     }
   }
-  std::vector<Obstacle> out;
+  std::vector<UrdfCollision> out;
   const urdf::LinkConstSharedPtr root = model.getRoot();
   if (!root) throw std::runtime_error(doc + ": the robot has no root link");
 
@@ -191,11 +191,14 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
         const auto& collisions = link.collision_array;
         for (size_t i = 0; i < collisions.size(); ++i) {
           const urdf::Collision& col = *collisions[i];
-          Obstacle ob;
+          UrdfCollision item;
+          item.link = link.name;
+          item.in_link = to_iso(col.origin);
+          Obstacle& ob = item.obstacle;
           ob.name = collisions.size() > 1 ? link.name + "/" + std::to_string(i) : link.name;
           const std::string where =
               doc + ": link '" + link.name + "' collision " + std::to_string(i);
-          ob.pose = pose * to_iso(col.origin);
+          ob.pose = pose * item.in_link;
           ob.moving = moving;
           if (!col.geometry) throw std::runtime_error(where + ": no geometry");
           auto positive = [&](double v, const std::string& what) {
@@ -254,7 +257,7 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
             default:
               throw std::runtime_error(where + ": unknown geometry type");
           }
-          out.push_back(std::move(ob));
+          out.push_back(std::move(item));
         }
         for (const urdf::JointSharedPtr& joint : link.child_joints) {
           const urdf::LinkConstSharedPtr child = model.getLink(joint->child_link_name);
@@ -290,6 +293,15 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
   return out;
 }
 
+std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
+                                   const fs::path& base,
+                                   const std::map<std::string, double>& joint_values) {
+  std::vector<Obstacle> out;
+  for (UrdfCollision& c : collisions_of(model, doc, base, joint_values))
+    out.push_back(std::move(c.obstacle));
+  return out;
+}
+
 }  // namespace
 
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
@@ -298,6 +310,18 @@ std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::st
   const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
   return obstacles_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir),
                       joint_values);
+}
+
+std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
+                                                 const std::string& base_dir,
+                                                 const std::string& doc,
+                                                 std::vector<std::string>* link_names) {
+  const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
+  if (link_names) {
+    link_names->clear();
+    for (const auto& kv : model->links_) link_names->push_back(kv.first);
+  }
+  return collisions_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir), {});
 }
 
 std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
