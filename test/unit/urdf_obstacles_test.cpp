@@ -188,7 +188,9 @@ TEST_F(UrdfObstacles, CollisionsWithTheirLinks) {
       link.translation() = Vec3(0.0, 0.0, 1.0);
       EXPECT_LT(((link * c.in_link).matrix() - c.obstacle.pose.matrix()).norm(), 1e-12);
     }
-    if (c.obstacle.name == "tool") EXPECT_EQ(c.link, "tool");
+    if (c.obstacle.name == "tool") {
+      EXPECT_EQ(c.link, "tool");
+    }
   }
   try {
     parse_urdf_collisions("<robot name='x'><link name='a'/>", "", "parameter /robot_description");
