@@ -172,7 +172,8 @@ namespace {
 
 std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, const std::string& doc,
                                          const fs::path& base,
-                                         const std::map<std::string, double>& joint_values) {
+                                         const std::map<std::string, double>& joint_values,
+                                         std::vector<UrdfChain>* chains) {
   for (const auto& [name, value] : joint_values) {
     if (!model.getJoint(name)) {
       throw std::runtime_error(doc + ": joint '" + name +
@@ -186,6 +187,7 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
   const urdf::LinkConstSharedPtr root = model.getRoot();
   if (!root) throw std::runtime_error(doc + ": the robot has no root link");
 
+  std::vector<UrdfChain::Joint> path;  // the joints from the root to the visited link
   std::function<void(const urdf::Link&, const Eigen::Isometry3d&, bool)> visit =
       [&](const urdf::Link& link, const Eigen::Isometry3d& pose, bool moving) {
         const auto& collisions = link.collision_array;
@@ -258,6 +260,7 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
               throw std::runtime_error(where + ": unknown geometry type");
           }
           out.push_back(std::move(item));
+          if (chains) chains->push_back({path, to_iso(col.origin)});
         }
         for (const urdf::JointSharedPtr& joint : link.child_joints) {
           const urdf::LinkConstSharedPtr child = model.getLink(joint->child_link_name);
@@ -267,16 +270,26 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
           const Vec3 axis(joint->axis.x, joint->axis.y, joint->axis.z);
           Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
           bool movable = false;
+          UrdfChain::Joint step;
+          step.name = joint->name;
+          step.origin = to_iso(joint->parent_to_joint_origin_transform);
           switch (joint->type) {
             case urdf::Joint::REVOLUTE:
             case urdf::Joint::CONTINUOUS:
               movable = true;
-              if (axis.norm() > 0.0)
+              if (axis.norm() > 0.0) {
                 motion.linear() = Eigen::AngleAxisd(q, axis.normalized()).matrix();
+                step.type = UrdfChain::Joint::Type::kRevolute;
+                step.axis = axis.normalized();
+              }
               break;
             case urdf::Joint::PRISMATIC:
               movable = true;
-              if (axis.norm() > 0.0) motion.translation() = q * axis.normalized();
+              if (axis.norm() > 0.0) {
+                motion.translation() = q * axis.normalized();
+                step.type = UrdfChain::Joint::Type::kPrismatic;
+                step.axis = axis.normalized();
+              }
               break;
             case urdf::Joint::FLOATING:
             case urdf::Joint::PLANAR:
@@ -285,8 +298,10 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
             default:
               break;
           }
+          path.push_back(step);
           visit(*child, pose * to_iso(joint->parent_to_joint_origin_transform) * motion,
                 moving || movable);
+          path.pop_back();
         }
       };
   visit(*root, Eigen::Isometry3d::Identity(), false);
@@ -295,9 +310,10 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
 
 std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
                                    const fs::path& base,
-                                   const std::map<std::string, double>& joint_values) {
+                                   const std::map<std::string, double>& joint_values,
+                                   std::vector<UrdfChain>* chains) {
   std::vector<Obstacle> out;
-  for (UrdfCollision& c : collisions_of(model, doc, base, joint_values))
+  for (UrdfCollision& c : collisions_of(model, doc, base, joint_values, chains))
     out.push_back(std::move(c.obstacle));
   return out;
 }
@@ -305,11 +321,12 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
 }  // namespace
 
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
-                                           const std::map<std::string, double>& joint_values) {
+                                           const std::map<std::string, double>& joint_values,
+                                           std::vector<UrdfChain>* chains) {
   const std::string doc = "<urdf string>";
   const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
   return obstacles_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir),
-                      joint_values);
+                      joint_values, chains);
 }
 
 std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
@@ -325,14 +342,15 @@ std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
 }
 
 std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
-                                          const std::map<std::string, double>& joint_values) {
+                                          const std::map<std::string, double>& joint_values,
+                                          std::vector<UrdfChain>* chains) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("URDF file '" + path + "' cannot be opened");
   std::stringstream text;
   text << in.rdbuf();
   const std::string doc = "URDF file '" + path + "'";
   const urdf::ModelInterfaceSharedPtr model = parse(text.str(), doc);
-  return obstacles_of(*model, doc, fs::path(path).parent_path(), joint_values);
+  return obstacles_of(*model, doc, fs::path(path).parent_path(), joint_values, chains);
 }
 
 }  // namespace corde
