@@ -338,7 +338,8 @@ std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
     link_names->clear();
     for (const auto& kv : model->links_) link_names->push_back(kv.first);
   }
-  return collisions_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir), {});
+  return collisions_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir), {},
+                       nullptr);
 }
 
 std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
