@@ -2,9 +2,10 @@
 // constraints with exact Coulomb friction (docs/model.md, "Contacts").
 //
 // Each step: detection finds every pair (segment, obstacle) and (segment, segment) whose surfaces
-// are within a speculative margin (the distance the pair can close in one step, plus a small
-// skin); the solver then finds impulses such that after the step no gap is closed past zero
-// (d + h v_n >= 0: nothing tunnels at the speeds the scene reaches) and the tangential impulse
+// are within a speculative margin (the distance the pair can close in one step, the obstacle's own
+// motion included, plus a small skin); the solver then finds impulses such that after the step no
+// gap is closed past zero (d + h v_n >= 0, v the velocity relative to the other surface, a moving
+// obstacle's included: nothing tunnels at the speeds the scene reaches) and the tangential impulse
 // lies in the Coulomb disc |p_t| <= mu p_n (sticking while inside, sliding on its rim), by
 // projected Gauss-Seidel over the contacts, warm started from the last step's impulses. The
 // impulses enter the step as forces p / h on the segments' nodes, split by the contact point's
@@ -43,10 +44,11 @@ struct Contact {
   double s_a = 0.0;            // along segment a, 0..1
   int rod_b = -1, seg_b = -1;  // the other rod and segment, or -1 for an obstacle
   double s_b = 0.0;
-  int obstacle = -1;            // the obstacle's index when rod_b < 0
-  Vec3 normal = Vec3::UnitZ();  // unit, from b (or the obstacle) towards a
-  Vec3 point = Vec3::Zero();    // on b's surface (world), for display
-  double gap = 0.0;             // distance between the surfaces (negative: penetration)
+  int obstacle = -1;                     // the obstacle's index when rod_b < 0
+  Vec3 normal = Vec3::UnitZ();           // unit, from b (or the obstacle) towards a
+  Vec3 point = Vec3::Zero();             // on b's surface (world), for display
+  Vec3 surface_velocity = Vec3::Zero();  // an obstacle's: the velocity of its surface at `point`
+  double gap = 0.0;                      // distance between the surfaces (negative: penetration)
   double mu = 0.0;
   double pn = 0.0;         // normal impulse of the step (N s)
   Vec3 pt = Vec3::Zero();  // tangential impulse (N s)

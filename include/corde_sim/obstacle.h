@@ -40,6 +40,11 @@ struct Obstacle {
   // Contacts constrain the rod's velocity relative to the obstacle's surface point.
   Vec3 linear_velocity = Vec3::Zero();
   Vec3 angular_velocity = Vec3::Zero();
+
+  // The velocity of the obstacle's material point at p (world).
+  Vec3 velocity_at(const Vec3& p) const {
+    return linear_velocity + angular_velocity.cross(p - pose.translation());
+  }
 };
 
 // Closest points between a rod segment's axis [a, b] and an obstacle's surface. Always
@@ -84,12 +89,16 @@ class ObstacleSet {
 
   // Every obstacle whose surface is within `reach` of the segment's axis [a, b]: appends one
   // closest-point pair per such obstacle to `out` (with `which` the obstacle's index; `which` may
-  // be null). Bounding boxes first (the obstacle's own box in the world grown by `reach`; for a
-  // plane, the end points' heights), then the exact query. Primitives and planes allocate nothing
+  // be null). A moving obstacle's reach grows by what its surface can travel in `h` seconds at its
+  // velocity (the largest speed of its surface: the origin's speed plus the angular speed times
+  // the farthest point of its bounding box; a plane: its speed along its normal plus the angular
+  // speed times the segment's farthest end from its origin), so that a step of h finds it.
+  // Bounding boxes first (the obstacle's own box in the world grown by the reach; for a plane, the
+  // end points' heights), then the exact query. Primitives and planes allocate nothing
   // but `out`'s and `which`'s growth; meshes allocate inside FCL (about 4 times per query
   // measured). Concurrent queries are safe (no set_pose or add meanwhile).
   void query(const Vec3& a, const Vec3& b, double reach, std::vector<SegmentContact>* out,
-             std::vector<int>* which) const;
+             std::vector<int>* which, double h = 0.0) const;
 
  private:
   struct Impl;

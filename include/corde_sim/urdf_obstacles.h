@@ -2,6 +2,7 @@
 // kinematics at given joint values. Meshes are read with assimp.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <map>
 #include <string>
 #include <vector>
@@ -25,13 +26,65 @@ namespace corde {
 // Throws std::runtime_error naming the file and the element (link, collision index, joint) for a
 // URDF that does not parse, a missing or unreadable mesh, a non-positive or non-finite size or
 // scale, or a joint name in `joint_values` the robot lacks.
+//
+// `chains`, when given, receives per obstacle (same order) how it is posed from the joint values,
+// for re-posing the links when joints move (UrdfChain::pose).
+struct UrdfChain;
 std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
-                                          const std::map<std::string, double>& joint_values = {});
+                                          const std::map<std::string, double>& joint_values = {},
+                                          std::vector<UrdfChain>* chains = nullptr);
 
 // The same from the URDF's text; relative mesh names are resolved against `base_dir`. Messages
 // name the document "<urdf string>".
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
-                                           const std::map<std::string, double>& joint_values = {});
+                                           const std::map<std::string, double>& joint_values = {},
+                                           std::vector<UrdfChain>* chains = nullptr);
+
+// Forward kinematics of one URDF obstacle: the joints from the root link to its link, then its
+// collision origin. pose(q) = origin_1 M_1(q_1) ... origin_k M_k(q_k) collision, M a rotation
+// about the joint's axis (revolute, continuous) or a translation along it (prismatic), identity
+// for the other kinds; the result is in the root link's frame.
+struct UrdfChain {
+  struct Joint {
+    enum class Type { kFixed, kRevolute, kPrismatic };
+    std::string name;
+    Type type = Type::kFixed;
+    Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();  // in the parent link's frame
+    Vec3 axis = Vec3::UnitZ();                                 // unit, in the joint's frame
+  };
+  std::vector<Joint> joints;
+  Eigen::Isometry3d collision = Eigen::Isometry3d::Identity();
+  // `value(name)` gives each movable joint's value (rad or m).
+  template <class Value>
+  Eigen::Isometry3d pose(const Value& value) const {
+    Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+    for (const Joint& j : joints) {
+      p = p * j.origin;
+      if (j.type == Joint::Type::kRevolute)
+        p.rotate(Eigen::AngleAxisd(value(j.name), j.axis));
+      else if (j.type == Joint::Type::kPrismatic)
+        p.translate(value(j.name) * j.axis);
+    }
+    return p * collision;
+  }
+};
+
+// One collision element with the link it belongs to, for following a moving robot: the
+// obstacle's pose is link pose * in_link (the collision origin); `obstacle` is posed at the
+// root link's identity with every joint at 0 (marked `moving` behind a movable joint).
+struct UrdfCollision {
+  std::string link;
+  Eigen::Isometry3d in_link = Eigen::Isometry3d::Identity();
+  Obstacle obstacle;
+};
+
+// Every collision element of the URDF text `xml`, checked and read like parse_urdf_obstacles
+// (same names, same errors), with messages naming the document `doc` (e.g. "parameter
+// robot_description"). `link_names`, if given, receives the names of all the robot's links.
+std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
+                                                 const std::string& base_dir,
+                                                 const std::string& doc,
+                                                 std::vector<std::string>* link_names = nullptr);
 
 // A file name as URDF files (and the scene key `urdf`) give them: `package://<pkg>/<path>` (the
 // package's folder looked up as for meshes above, starting at `base_dir`), `file://<path>`, an

@@ -7,6 +7,7 @@
 
 #include "corde_sim/contact.h"
 #include "corde_sim/obstacle.h"
+#include "corde_sim/obstacle_motion.h"
 #include "corde_sim/rod.h"
 
 namespace corde {
@@ -35,12 +36,15 @@ class World {
   // Obstacles the rods touch (none: null) and how contacts are solved (contact.h).
   std::shared_ptr<ObstacleSet> obstacles;
   ContactSettings contact;
+  // Keyframed obstacles: posed at the start of every step with the step's velocity (before the
+  // contacts see them). Obstacles moved from outside (set_pose) are not listed here.
+  std::vector<ObstacleMotion> obstacle_motions;
 
   double time() const { return time_; }
   void set_time(double t) { time_ = t; }
-  // Advances every rod by time_step: a world without anything to collide runs each rod's fused
-  // step; otherwise forces of every rod, then contacts (detection and the constraint solve), then
-  // the integration and the drives.
+  // Advances every rod by time_step: keyframed obstacles are posed first; a world without
+  // anything to collide runs each rod's fused step; otherwise forces of every rod, then contacts
+  // (detection and the constraint solve), then the integration and the drives.
   void step();
   // The contact stage of the last step (null until a step needed it).
   const ContactSystem* contacts() const { return contacts_.get(); }

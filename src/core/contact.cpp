@@ -112,8 +112,9 @@ void ContactSystem::solve(World& world, double h) {
       Contact& c = contacts_[k];
       const double w = wsum[k];
       if (!(w > 0.0)) continue;
+      // Relative to the other surface: a rod's, or a (moving) obstacle's.
       Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
-      if (c.rod_b >= 0) vr -= point_velocity(c.rod_b, c.seg_b, c.s_b);
+      vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
       // Normal: d + h v_n >= 0 for a gap; a penetration is pushed out at a capped speed.
       const double target =
           c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
@@ -192,12 +193,13 @@ void ContactSystem::detect(World& world, double h) {
         const bool node = item <= n;
         const int s = node ? std::min(item, n - 1) : item - n - 1;
         const int i0 = node ? item : s, i1 = node ? item : s + 1;
-        // How far the point or segment can travel in the step, plus a skin.
+        // How far the point or segment can travel in the step, plus a skin (the query adds what
+        // a moving obstacle's surface can travel).
         const double speed = std::max({v[i0].norm(), v[i1].norm(), v0[i0].norm(), v0[i1].norm()});
         const double reach = radius * (1.0 + cs.skin) + h * speed;
         found_.clear();
         which_.clear();
-        obs.query(x[i0], x[i1], reach, &found_, &which_);
+        obs.query(x[i0], x[i1], reach, &found_, &which_, h);
         for (size_t k = 0; k < found_.size(); ++k) {
           const SegmentContact& f = found_[k];
           if (!node && (f.s <= 1e-9 || f.s >= 1.0 - 1e-9)) continue;  // a node's contact
@@ -209,7 +211,9 @@ void ContactSystem::detect(World& world, double h) {
           c.normal = f.normal;
           c.point = f.on_obstacle;
           c.gap = f.distance - radius;
-          c.mu = obs.obstacle(which_[k]).friction;
+          const Obstacle& ob = obs.obstacle(which_[k]);
+          c.mu = ob.friction;
+          c.surface_velocity = ob.velocity_at(f.on_obstacle);
           contacts_.push_back(c);
         }
       }

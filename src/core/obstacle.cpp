@@ -137,8 +137,11 @@ double minimise_convex(const F& f, double lo = 0.0, double hi = 1.0) {
 
 struct Entry {
   Obstacle ob;
-  Box3 local_box;                                 // bounds in the obstacle frame (not for planes)
-  Box3 world_box;                                 // local_box's corners in the world
+  Box3 local_box;       // bounds in the obstacle frame (not for planes)
+  Box3 world_box;       // local_box's corners in the world
+  double extent = 0.0;  // farthest point of local_box from the frame's origin (not for planes)
+  double speed = 0.0;   // the largest speed of the surface (planes: along the normal, unturned)
+  double spin = 0.0;    // planes: the angular speed (the surface speed grows with the distance)
   std::shared_ptr<fcl::CollisionGeometryd> geom;  // boxes, cylinders, meshes
   std::unique_ptr<fcl::CollisionObjectd> object;
   // Meshes: unit face normals (by winding) and, when the mesh is closed (every edge shared by
@@ -306,6 +309,9 @@ int ObstacleSet::add(const Obstacle& obstacle) {
     default:
       throw std::invalid_argument(who + ": unknown shape kind");
   }
+  if (obstacle.shape.kind != Kind::kPlane)
+    for (int c = 0; c < 8; ++c)
+      e.extent = std::max(e.extent, e.local_box.corner(static_cast<Box3::CornerType>(c)).norm());
   if (e.geom) {
     e.geom->computeLocalAABB();
     e.object = std::make_unique<fcl::CollisionObjectd>(e.geom);
@@ -336,6 +342,11 @@ void ObstacleSet::set_pose(int i, const Eigen::Isometry3d& pose, const Vec3& lin
   set_pose(i, pose);
   e.ob.linear_velocity = linear_velocity;
   e.ob.angular_velocity = angular_velocity;
+  // A plane slides along itself without coming closer: only its normal speed counts.
+  const bool plane = e.ob.shape.kind == ObstacleShape::Kind::kPlane;
+  e.speed = plane ? std::abs(pose.linear().col(2).dot(linear_velocity))
+                  : linear_velocity.norm() + angular_velocity.norm() * e.extent;
+  e.spin = plane ? angular_velocity.norm() : 0.0;
 }
 
 namespace {
@@ -534,14 +545,21 @@ SegmentContact mesh_query(const Entry& e, const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-void ObstacleSet::query(const Vec3& a, const Vec3& b, double reach,
-                        std::vector<SegmentContact>* out, std::vector<int>* which) const {
+void ObstacleSet::query(const Vec3& a, const Vec3& b, double rod_reach,
+                        std::vector<SegmentContact>* out, std::vector<int>* which, double h) const {
   using Kind = ObstacleShape::Kind;
   const Box3 seg_box = Box3(a.cwiseMin(b), a.cwiseMax(b));
   for (size_t i = 0; i < impl_->entries.size(); ++i) {
     const Entry& e = impl_->entries[i];
     const Eigen::Isometry3d& pose = e.ob.pose;
     const Vec3& size = e.ob.shape.size;
+    double reach = rod_reach;
+    if (h > 0.0 && (e.speed > 0.0 || e.spin > 0.0)) {
+      const double arm =
+          e.spin > 0.0 ? std::max((a - pose.translation()).norm(), (b - pose.translation()).norm())
+                       : 0.0;
+      reach += h * (e.speed + e.spin * arm);
+    }
     SegmentContact c;
     if (e.ob.shape.kind == Kind::kPlane) {
       // Signed heights of the end points; the lower one is closest (or deepest). A segment

@@ -1,7 +1,8 @@
-// Scene keys for contacts: obstacles (primitives and URDF files), the solver's settings and each
-// rod's contact options (docs/scene_format.md, "Obstacles and contacts").
+// Scene keys for contacts: obstacles (primitives and URDF files, fixed or keyframed), the solver's
+// settings and each rod's contact options (docs/scene_format.md, "Obstacles and contacts").
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include "corde_sim/urdf_obstacles.h"
 #include "scene_reader.h"
@@ -35,12 +36,87 @@ Eigen::Isometry3d read_pose(Map* m, bool normal_ok) {
   return pose;
 }
 
-void add(ObstacleSet* set, const Obstacle& o, const Value& where) {
+int add(ObstacleSet* set, const Obstacle& o, const Value& where) {
   try {
-    set->add(o);
+    return set->add(o);
   } catch (const std::exception& e) {
     where.fail(e.what());
   }
+}
+
+// An entry's keyframed motion (the keys of keyframed drives): the frame at `pose` moves about its
+// own origin, `turns` about its z axis (a cylinder's or capsule's axis, a plane's normal).
+std::shared_ptr<const Motion> read_obstacle_motion(Map* m, const Eigen::Isometry3d& pose,
+                                                   const std::string& base) {
+  MotionStart start;
+  start.position = pose.translation();
+  start.orientation = Quat(pose.linear()).normalized();
+  start.tangent = pose.linear().col(2);
+  return read_motion(m, start, base);
+}
+
+// A URDF entry's `joint_motion`: per joint, keyframes of its value ({time, value}; a keyframe
+// without a value keeps the one before) or the shortcut move_by (a change of the value) over
+// ramp_time from start_time; interpolation as for drives. Each motion's displacement x is the
+// change of the joint's value from `start` (its `joints` value, else 0).
+std::map<std::string, std::shared_ptr<const Motion>> read_joint_motions(
+    const Value& v, const std::map<std::string, double>& start) {
+  if (!v.is_map()) v.fail("expected a map of joint names to motions, got " + v.describe());
+  std::map<std::string, std::shared_ptr<const Motion>> out;
+  for (const auto& kv : v.node()) {
+    const std::string joint = kv.first.as<std::string>();
+    Map m(Value(kv.second, v.path() + "." + joint));
+    const auto s = start.find(joint);
+    const double q0 = s == start.end() ? 0.0 : s->second;
+    auto how = [&](Motion::Interpolation fallback) {
+      auto p = m.find("interpolation");
+      if (!p) return fallback;
+      const std::string c = p->choice({"smooth", "stop", "linear"});
+      return c == "smooth" ? Motion::Interpolation::kSmooth
+             : c == "stop" ? Motion::Interpolation::kStop
+                           : Motion::Interpolation::kLinear;
+    };
+    if (auto kv_frames = m.find("keyframes")) {
+      for (const char* k : {"move_by", "ramp_time", "start_time"})
+        if (m.has(k)) kv_frames->fail(std::string("give either keyframes or ") + k);
+      if (!kv_frames->is_sequence() || kv_frames->node().size() == 0)
+        kv_frames->fail("expected a non-empty list of keyframes, got " + kv_frames->describe());
+      if (kv_frames->node().size() > static_cast<size_t>(SceneLimits::max_items))
+        kv_frames->fail("more than the limit of " + std::to_string(SceneLimits::max_items) +
+                        " keyframes");
+      std::vector<Keyframe> frames;
+      Keyframe previous;
+      for (const Value& item : kv_frames->items()) {
+        Map f(item);
+        Keyframe k = previous;
+        k.time = f.get("time").non_negative();
+        if (auto p = f.find("value")) k.displacement.x() = p->number() - q0;
+        f.finish();
+        frames.push_back(k);
+        previous = k;
+      }
+      const Motion::Interpolation interpolation = how(Motion::Interpolation::kSmooth);
+      m.finish();
+      try {
+        out[joint] = std::make_shared<Motion>(std::move(frames), interpolation);
+      } catch (const std::invalid_argument& e) {
+        kv_frames->fail(e.what());
+      }
+      continue;
+    }
+    if (!m.has("move_by")) m.fail("needs keyframes or move_by");
+    const double d = m.get("move_by").number();
+    if (!m.has("ramp_time"))
+      throw SceneError(m.path() + ".ramp_time: missing (required with move_by)");
+    const double ramp = m.get("ramp_time").positive();
+    double t0 = 0.0;
+    if (auto p = m.find("start_time")) t0 = p->non_negative();
+    const Motion::Interpolation interpolation = how(Motion::Interpolation::kStop);
+    m.finish();
+    out[joint] = std::make_shared<Motion>(
+        Motion::ramp(t0, ramp, Vec3(d, 0, 0), 0.0, Vec3::UnitZ(), interpolation));
+  }
+  return out;
 }
 
 }  // namespace
@@ -60,7 +136,13 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
     double friction = 0.5;
     if (auto f = m.find("friction")) friction = f->non_negative();
     bool moving = false;
-    if (auto mv = m.find("moving")) moving = mv->boolean();
+    std::optional<Value> moving_key = m.find("moving");
+    if (moving_key) moving = moving_key->boolean();
+    // A keyframed obstacle moves: `moving: false` beside keyframes is a contradiction.
+    auto keyframed = [&](bool driven) {
+      if (driven && moving_key && !moving) moving_key->fail("false, but the obstacle is keyframed");
+      return driven;
+    };
     if (m.has("urdf")) {
       if (m.has("type")) m.fail("give either type or urdf");
       const Value file = m.get("urdf");
@@ -72,21 +154,69 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
               Value(kv.second, j->path() + "." + kv.first.as<std::string>()).number();
       }
       const Eigen::Isometry3d base_pose = read_pose(&m, false);
+      const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, base_pose, base);
+      // Joint values over time: the start values and each moving joint's motion.
+      struct JointDrive {
+        std::map<std::string, double> start;
+        std::map<std::string, std::shared_ptr<const Motion>> motions;
+      };
+      auto drive = std::make_shared<JointDrive>();
+      std::optional<Value> joint_key = m.find("joint_motion");
+      if (joint_key) drive->motions = read_joint_motions(*joint_key, joints);
+      const bool driven = keyframed(motion || !drive->motions.empty());
       m.finish();
+      drive->start = joints;
+      // Joints that move are named to the loader too, so that a name the robot lacks is an error.
+      std::map<std::string, double> named = joints;
+      for (const auto& kv : drive->motions) named.emplace(kv.first, 0.0);
       std::vector<Obstacle> parts;
+      std::vector<UrdfChain> chains;
       try {
         // package:// and file:// names as in URDF files; plain relative ones from the scene's
         // folder.
-        parts = load_urdf_obstacles(resolve_resource_path(file.string(), base), joints);
+        parts = load_urdf_obstacles(resolve_resource_path(file.string(), base), named, &chains);
       } catch (const std::exception& e) {
         file.fail(e.what());
       }
-      for (Obstacle& o : parts) {
+      for (const auto& kv : drive->motions) {
+        bool moves_a_link = false;
+        for (const UrdfChain& c : chains)
+          for (const UrdfChain::Joint& j : c.joints)
+            moves_a_link |= j.name == kv.first && j.type != UrdfChain::Joint::Type::kFixed;
+        if (!moves_a_link)
+          Value(joint_key->node()[kv.first], joint_key->path() + "." + kv.first)
+              .fail("joint '" + kv.first +
+                    "' is not a revolute, continuous or prismatic joint above a collision element");
+      }
+      for (size_t p = 0; p < parts.size(); ++p) {
+        Obstacle& o = parts[p];
+        bool follows_joints = false;
+        for (const UrdfChain::Joint& j : chains[p].joints)
+          follows_joints |= drive->motions.count(j.name) > 0;
+        const Eigen::Isometry3d link = o.pose;
         o.name = name + "/" + o.name;
-        o.pose = base_pose * o.pose;
+        o.pose = base_pose * link;
         o.friction = friction;
-        o.moving = moving;
-        add(world->obstacles.get(), o, item);
+        // Marked moving by the URDF (behind a movable joint) only if asked to or driven.
+        o.moving = moving || motion || follows_joints;
+        const int i = add(world->obstacles.get(), o, item);
+        if (!driven) continue;
+        ObstacleMotion om;
+        om.obstacle = i;
+        om.motion = motion;
+        om.start = base_pose;
+        om.local = link;
+        if (follows_joints)
+          om.local_at = [drive, chain = chains[p]](double t) {
+            return chain.pose([&](const std::string& joint) {
+              const auto s = drive->start.find(joint);
+              double q = s == drive->start.end() ? 0.0 : s->second;
+              const auto m = drive->motions.find(joint);
+              if (m != drive->motions.end()) q += m->second->at(t).displacement.x();
+              return q;
+            });
+          };
+        if (motion || follows_joints) world->obstacle_motions.push_back(std::move(om));
       }
       continue;
     }
@@ -112,8 +242,17 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
       o.shape.size.x() = m.get("radius").positive();
       if (type != "sphere") o.shape.size.y() = m.get("length").positive();
     }
+    const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, o.pose, base);
+    o.moving = moving || keyframed(motion != nullptr);
     m.finish();
-    add(world->obstacles.get(), o, item);
+    const int i = add(world->obstacles.get(), o, item);
+    if (motion) {
+      ObstacleMotion om;
+      om.obstacle = i;
+      om.motion = motion;
+      om.start = o.pose;
+      world->obstacle_motions.push_back(std::move(om));
+    }
   }
 }
 

@@ -179,9 +179,10 @@ TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale) {
 
 namespace {
 
-std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
-                                   const fs::path& base,
-                                   const std::map<std::string, double>& joint_values) {
+std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, const std::string& doc,
+                                         const fs::path& base,
+                                         const std::map<std::string, double>& joint_values,
+                                         std::vector<UrdfChain>* chains) {
   for (const auto& [name, value] : joint_values) {
     if (!model.getJoint(name)) {
       throw std::runtime_error(doc + ": joint '" + name +
@@ -191,20 +192,24 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
       throw std::runtime_error(doc + ": joint '" + name + "': the value is not finite");
     }
   }
-  std::vector<Obstacle> out;
+  std::vector<UrdfCollision> out;
   const urdf::LinkConstSharedPtr root = model.getRoot();
   if (!root) throw std::runtime_error(doc + ": the robot has no root link");
 
+  std::vector<UrdfChain::Joint> path;  // the joints from the root to the visited link
   std::function<void(const urdf::Link&, const Eigen::Isometry3d&, bool)> visit =
       [&](const urdf::Link& link, const Eigen::Isometry3d& pose, bool moving) {
         const auto& collisions = link.collision_array;
         for (size_t i = 0; i < collisions.size(); ++i) {
           const urdf::Collision& col = *collisions[i];
-          Obstacle ob;
+          UrdfCollision item;
+          item.link = link.name;
+          item.in_link = to_iso(col.origin);
+          Obstacle& ob = item.obstacle;
           ob.name = collisions.size() > 1 ? link.name + "/" + std::to_string(i) : link.name;
           const std::string where =
               doc + ": link '" + link.name + "' collision " + std::to_string(i);
-          ob.pose = pose * to_iso(col.origin);
+          ob.pose = pose * item.in_link;
           ob.moving = moving;
           if (!col.geometry) throw std::runtime_error(where + ": no geometry");
           auto positive = [&](double v, const std::string& what) {
@@ -263,7 +268,8 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
             default:
               throw std::runtime_error(where + ": unknown geometry type");
           }
-          out.push_back(std::move(ob));
+          out.push_back(std::move(item));
+          if (chains) chains->push_back({path, to_iso(col.origin)});
         }
         for (const urdf::JointSharedPtr& joint : link.child_joints) {
           const urdf::LinkConstSharedPtr child = model.getLink(joint->child_link_name);
@@ -273,16 +279,26 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
           const Vec3 axis(joint->axis.x, joint->axis.y, joint->axis.z);
           Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
           bool movable = false;
+          UrdfChain::Joint step;
+          step.name = joint->name;
+          step.origin = to_iso(joint->parent_to_joint_origin_transform);
           switch (joint->type) {
             case urdf::Joint::REVOLUTE:
             case urdf::Joint::CONTINUOUS:
               movable = true;
-              if (axis.norm() > 0.0)
+              if (axis.norm() > 0.0) {
                 motion.linear() = Eigen::AngleAxisd(q, axis.normalized()).matrix();
+                step.type = UrdfChain::Joint::Type::kRevolute;
+                step.axis = axis.normalized();
+              }
               break;
             case urdf::Joint::PRISMATIC:
               movable = true;
-              if (axis.norm() > 0.0) motion.translation() = q * axis.normalized();
+              if (axis.norm() > 0.0) {
+                motion.translation() = q * axis.normalized();
+                step.type = UrdfChain::Joint::Type::kPrismatic;
+                step.axis = axis.normalized();
+              }
               break;
             case urdf::Joint::FLOATING:
             case urdf::Joint::PLANAR:
@@ -291,33 +307,60 @@ std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std:
             default:
               break;
           }
+          path.push_back(step);
           visit(*child, pose * to_iso(joint->parent_to_joint_origin_transform) * motion,
                 moving || movable);
+          path.pop_back();
         }
       };
   visit(*root, Eigen::Isometry3d::Identity(), false);
   return out;
 }
 
+std::vector<Obstacle> obstacles_of(const urdf::ModelInterface& model, const std::string& doc,
+                                   const fs::path& base,
+                                   const std::map<std::string, double>& joint_values,
+                                   std::vector<UrdfChain>* chains) {
+  std::vector<Obstacle> out;
+  for (UrdfCollision& c : collisions_of(model, doc, base, joint_values, chains))
+    out.push_back(std::move(c.obstacle));
+  return out;
+}
+
 }  // namespace
 
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
-                                           const std::map<std::string, double>& joint_values) {
+                                           const std::map<std::string, double>& joint_values,
+                                           std::vector<UrdfChain>* chains) {
   const std::string doc = "<urdf string>";
   const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
   return obstacles_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir),
-                      joint_values);
+                      joint_values, chains);
+}
+
+std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
+                                                 const std::string& base_dir,
+                                                 const std::string& doc,
+                                                 std::vector<std::string>* link_names) {
+  const urdf::ModelInterfaceSharedPtr model = parse(xml, doc);
+  if (link_names) {
+    link_names->clear();
+    for (const auto& kv : model->links_) link_names->push_back(kv.first);
+  }
+  return collisions_of(*model, doc, base_dir.empty() ? fs::current_path() : fs::path(base_dir), {},
+                       nullptr);
 }
 
 std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
-                                          const std::map<std::string, double>& joint_values) {
+                                          const std::map<std::string, double>& joint_values,
+                                          std::vector<UrdfChain>* chains) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("URDF file '" + path + "' cannot be opened");
   std::stringstream text;
   text << in.rdbuf();
   const std::string doc = "URDF file '" + path + "'";
   const urdf::ModelInterfaceSharedPtr model = parse(text.str(), doc);
-  return obstacles_of(*model, doc, fs::path(path).parent_path(), joint_values);
+  return obstacles_of(*model, doc, fs::path(path).parent_path(), joint_values, chains);
 }
 
 }  // namespace corde

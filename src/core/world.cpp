@@ -22,6 +22,8 @@ const Rod& World::rod(const std::string& name) const {
 }
 
 void World::step() {
+  if (obstacles && !obstacle_motions.empty())
+    move_obstacles(obstacle_motions, time_, time_step, obstacles.get());
   if (!ContactSystem::needed(*this)) {
     for (Rod& r : rods_) r.step(time_, time_step, gravity);
   } else {

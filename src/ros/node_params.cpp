@@ -258,6 +258,30 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
     }
   }
 
+  read(pnh, "robot_collision", p.robot_collision, false);
+  read<std::string>(pnh, "robot_description", p.robot_description, "robot_description");
+  if (p.robot_description.empty()) bad("robot_description", "must name a parameter");
+  read<std::string>(pnh, "robot_urdf_file", p.robot_urdf_file, "");
+  read(pnh, "robot_friction", p.robot_friction, 0.5);
+  if (!std::isfinite(p.robot_friction) || p.robot_friction < 0.0)
+    bad("robot_friction", "must be a friction coefficient >= 0, got " + num(p.robot_friction));
+  XmlRpc::XmlRpcValue ignore;
+  if (pnh.getParam("robot_ignore_links", ignore)) {
+    if (ignore.getType() != XmlRpc::XmlRpcValue::TypeArray)
+      bad("robot_ignore_links", "must be a list of link names");
+    for (int i = 0; i < ignore.size(); ++i) {
+      if (ignore[i].getType() != XmlRpc::XmlRpcValue::TypeString)
+        bad("robot_ignore_links", "must be a list of link names");
+      p.robot_ignore_links.push_back(static_cast<std::string>(ignore[i]));
+    }
+  }
+  read<std::string>(pnh, "robot_frame_prefix", p.robot_frame_prefix, "");
+  check_frame("robot_frame_prefix", p.robot_frame_prefix, true);
+  p.robot_max_speed = read_positive(pnh, "robot_max_speed", 5.0, "m/s");
+  p.robot_max_angular_speed = read_positive(pnh, "robot_max_angular_speed", 30.0, "rad/s");
+  read(pnh, "contact_markers", p.contact_markers, false);
+  p.contact_force_scale = read_positive(pnh, "contact_force_scale", 0.05, "m/N");
+
   ROS_INFO("corde_sim: ~scene = %s", p.scene.c_str());
   for (const std::string& o : p.overrides) ROS_INFO("corde_sim: ~overrides: %s", o.c_str());
   ROS_INFO("corde_sim: ~world_frame = %s, ~frame_prefix = '%s'", p.world_frame.c_str(),
@@ -289,6 +313,20 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
       p.workspace_min.x(), p.workspace_min.y(), p.workspace_min.z(), p.workspace_max.x(),
       p.workspace_max.y(), p.workspace_max.z(), p.max_grasp_distance, strain_action.c_str(),
       p.max_node_speed, p.max_angular_speed);
+  if (p.robot_collision || !p.robot_urdf_file.empty()) {
+    std::string ignored;
+    for (const std::string& l : p.robot_ignore_links) ignored += (ignored.empty() ? "" : ", ") + l;
+    ROS_INFO(
+        "corde_sim: robot collision from %s, ~robot_friction = %g, ~robot_ignore_links = [%s], "
+        "~robot_frame_prefix = '%s', ~robot_max_speed = %g m/s, ~robot_max_angular_speed = %g "
+        "rad/s",
+        p.robot_urdf_file.empty() ? ("parameter " + p.robot_description).c_str()
+                                  : ("file " + p.robot_urdf_file).c_str(),
+        p.robot_friction, ignored.c_str(), p.robot_frame_prefix.c_str(), p.robot_max_speed,
+        p.robot_max_angular_speed);
+  }
+  ROS_INFO("corde_sim: ~contact_markers = %s, ~contact_force_scale = %g m/N",
+           p.contact_markers ? "true" : "false", p.contact_force_scale);
   for (const auto& g : p.grasps)
     ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s%s%s", g.first.c_str(),
              to_string(g.second.source), g.second.frame.empty() ? "" : ", frame ",

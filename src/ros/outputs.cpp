@@ -94,7 +94,8 @@ void add_obstacle_markers(const corde::ObstacleSet& set, const MarkerOptions& o,
     const Eigen::Quaterniond q(pose.linear());
     const corde::Vec3& size = ob.shape.size;
     Marker m = base_marker("obstacles", id++, Marker::CUBE, o, stamp);
-    m.color = rgba(0.6, 0.6, 0.65, 0.5);
+    // Moving ones (robot links) tinted, to tell them from the scene's fixed obstacles.
+    m.color = ob.moving ? rgba(0.55, 0.65, 0.85, 0.5) : rgba(0.6, 0.6, 0.65, 0.5);
     set_pose(pose.translation(), q, &m.pose);
     switch (ob.shape.kind) {
       case Kind::kPlane:
@@ -334,6 +335,50 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
     out->markers.push_back(std::move(label));
   }
   if (world.obstacles) add_obstacle_markers(*world.obstacles, o, stamp, out);
+}
+
+int add_contact_markers(const corde::World& world, double force_scale, const MarkerOptions& o,
+                        const ros::Time& stamp, int previous,
+                        visualization_msgs::MarkerArray* out) {
+  using visualization_msgs::Marker;
+  const corde::ContactSystem* system = world.contacts();
+  const std::vector<corde::Contact> none;
+  const std::vector<corde::Contact>& contacts = system ? system->contacts() : none;
+  double diameter = o.min_diameter;
+  for (const corde::Rod& rod : world.rods())
+    diameter = std::max(diameter, 2.0 * rod.section().radius);
+  const double h = world.time_step;
+  Marker points = base_marker("contacts", 0, Marker::SPHERE_LIST, o, stamp);
+  points.scale.x = points.scale.y = points.scale.z = 0.8 * diameter;
+  points.color = rgba(0.9, 0.1, 0.1);
+  int arrows = 0;
+  for (const corde::Contact& c : contacts) {
+    const Eigen::Vector3d p = c.point;
+    if (!p.allFinite()) continue;
+    const bool active = c.pn > 0.0;
+    points.points.push_back(point(p));
+    points.colors.push_back(active ? rgba(0.9, 0.1, 0.1) : rgba(0.6, 0.6, 0.6, 0.7));
+    if (!active || !(h > 0.0)) continue;
+    const Eigen::Vector3d force = (c.pn * c.normal + c.pt) / h;  // on rod a
+    const double length = std::min(0.5, force_scale * force.norm());
+    if (!force.allFinite() || !(length > 1e-6)) continue;
+    Marker arrow = base_marker("contact_forces", arrows++, Marker::ARROW, o, stamp);
+    arrow.points.push_back(point(p));
+    arrow.points.push_back(point(p + length * force.normalized()));
+    arrow.scale.x = 0.25 * diameter;                         // shaft diameter
+    arrow.scale.y = 0.6 * diameter;                          // head diameter
+    arrow.scale.z = std::min(0.3 * length, 1.5 * diameter);  // head length
+    arrow.color = rgba(1.0, 0.9, 0.1);
+    out->markers.push_back(std::move(arrow));
+  }
+  if (points.points.empty()) points.action = Marker::DELETE;
+  out->markers.push_back(std::move(points));
+  for (int id = arrows; id < previous; ++id) {
+    Marker gone = base_marker("contact_forces", id, Marker::ARROW, o, stamp);
+    gone.action = Marker::DELETE;
+    out->markers.push_back(std::move(gone));
+  }
+  return arrows;
 }
 
 std::string strain_legend(const std::string& rod, double top) {

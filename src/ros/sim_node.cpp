@@ -96,6 +96,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   state_pub_ = nh_.advertise<WorldState>("rod_state", 10);
   if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
 
+  load_robot();
   std::string error = install_scene(std::move(scene), params_.scene);
   if (!error.empty()) throw std::invalid_argument("parameter ~scene: " + error);
 
@@ -159,8 +160,12 @@ long SimNode::run_steps(long n, double deadline) {
     if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
     if (!scripted_.empty()) drive_scripted(world_.time(), h);
     if (grasps) grasps_.before_step(world_, world_.time(), h);
+    if (!robot_.empty()) robot_.before_step(world_.obstacles.get(), h);
     world_.step();
     if (grasps) grasps_.after_step(world_, h);
+    if (const corde::ContactSystem* c = world_.contacts())
+      max_penetration_since_state_ =
+          std::max(max_penetration_since_state_, c->stats().max_penetration);
   }
   const double dt = wall_seconds() - t0;
   step_cpu_total_ += thread_cpu_seconds() - c0;
@@ -282,6 +287,10 @@ void SimNode::publish_markers() {
   o.world_frame = params_.world_frame;
   auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
   build_markers(world_, grasp_views(), o, stamp(), markers_clear_, msg.get());
+  if (markers_clear_) contact_arrows_ = 0;  // the DELETEALL took them
+  if (params_.contact_markers)
+    contact_arrows_ = add_contact_markers(world_, params_.contact_force_scale, o, stamp(),
+                                          contact_arrows_, msg.get());
   markers_clear_ = false;
   marker_pub_.publish(msg);
 }
@@ -319,6 +328,10 @@ void SimNode::publish_state() {
   msg->step_time_us = step_time_us_;
   msg->real_time_factor = measured_rtf_;
   msg->paused = paused_;
+  const corde::ContactSystem* contacts = world_.contacts();
+  msg->contacts = contacts ? contacts->stats().contacts : 0;
+  msg->active_contacts = contacts ? contacts->stats().active : 0;
+  msg->max_penetration = max_penetration_since_state_;
   state_pub_.publish(msg);
 }
 
@@ -341,6 +354,7 @@ void SimNode::publish_due(double now) {
   if (schedule_.take(OutputSchedule::kState, now)) {
     update_stats(now);
     if (params_.state_rate > 0.0) publish_state();
+    max_penetration_since_state_ = 0.0;
     publish_reactions();
     // What is published passed check_state(): the state to fall back on (copied at this rate
     // only; a copy reuses the snapshot's storage).
@@ -386,6 +400,9 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("contacts", contacts ? contacts->stats().contacts : 0);
   stat.add("contacts carrying a force", contacts ? contacts->stats().active : 0);
   stat.add("largest penetration (m)", contacts ? contacts->stats().max_penetration : 0.0);
+  if (!robot_.empty())
+    stat.addf("robot collision elements (in tf / all)", "%d / %d", robot_.active(),
+              robot_.elements());
   stat.add("recoveries from an invalid state", recoveries_);
   stat.add("last invalid state", last_problem_);
 }
@@ -419,6 +436,7 @@ int SimNode::run() {
   while (ros::ok()) {
     queue->callAvailable(ros::WallDuration(0));
     update_tf_holders();
+    update_robot();
     now = wall_seconds();
     if (!paused_) advance(now);
     now = wall_seconds();

@@ -22,6 +22,14 @@ bool valid_name(const std::string& s) {
   });
 }
 
+bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
+
+// First pose input of a grasp: the holder's reference glides there over this long instead of
+// jumping (the holder limits shape the motion further).
+constexpr double kFirstInputGlide = 0.1;  // s
+
+}  // namespace
+
 Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t) {
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   const auto& r = t.transform.rotation;
@@ -30,14 +38,6 @@ Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t) {
       t.transform.translation.z;
   return out;
 }
-
-bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
-
-// First pose input of a grasp: the holder's reference glides there over this long instead of
-// jumping (the holder limits shape the motion further).
-constexpr double kFirstInputGlide = 0.1;  // s
-
-}  // namespace
 
 std::string SimNode::resolve_scene(const std::string& path, std::string* error) const {
   if (path.empty()) {
@@ -86,6 +86,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
   }
   inputs_.clear();
   world_ = scene.world;
+  install_robot();  // the robot's links join the new world's obstacles
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);

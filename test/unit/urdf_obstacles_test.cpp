@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -165,6 +166,38 @@ void expect_error(const F& f, const std::vector<std::string>& fragments) {
     for (const std::string& frag : fragments) {
       EXPECT_NE(msg.find(frag), std::string::npos) << "'" << frag << "' not in: " << msg;
     }
+  }
+}
+
+// Per element its link and the pose in the link (the collision origin): the node moves them
+// with the link's tf frame. Every link's name is reported, also links without collisions.
+TEST_F(UrdfObstacles, CollisionsWithTheirLinks) {
+  const std::string xml = robot("package://my_pkg/meshes/cube.stl");
+  std::vector<std::string> links;
+  const std::vector<UrdfCollision> cols =
+      parse_urdf_collisions(xml, (dir_ / "my_pkg" / "urdf").string(), "test robot", &links);
+  ASSERT_EQ(cols.size(), 4u);
+  std::sort(links.begin(), links.end());
+  EXPECT_EQ(links, (std::vector<std::string>{"arm", "base_link", "tool", "visual_only"}));
+  for (const UrdfCollision& c : cols) {
+    if (c.obstacle.name == "arm/0") {
+      EXPECT_EQ(c.link, "arm");
+      EXPECT_LT((c.in_link.translation() - Vec3(0.25, 0.0, 0.0)).norm(), 1e-12);
+      // The in-link pose times the link's pose at zero joints (z = 1) is the obstacle's pose.
+      Eigen::Isometry3d link = Eigen::Isometry3d::Identity();
+      link.translation() = Vec3(0.0, 0.0, 1.0);
+      EXPECT_LT(((link * c.in_link).matrix() - c.obstacle.pose.matrix()).norm(), 1e-12);
+    }
+    if (c.obstacle.name == "tool") {
+      EXPECT_EQ(c.link, "tool");
+    }
+  }
+  try {
+    parse_urdf_collisions("<robot name='x'><link name='a'/>", "", "parameter /robot_description");
+    FAIL() << "a broken URDF parsed";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("parameter /robot_description"), std::string::npos)
+        << e.what();
   }
 }
 

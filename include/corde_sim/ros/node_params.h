@@ -65,6 +65,17 @@ struct NodeParams {
   double status_period = 10.0;  // s of wall time between status lines in the log; 0 = none
   double benchmark = 0.0;       // s of wall time; > 0 runs, prints timings and exits
   std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame,offset,snap}
+  // A robot's links as moving obstacles (docs/ros_interface.md, "Robot collision").
+  bool robot_collision = false;                         // true, or robot_urdf_file given: on
+  std::string robot_description = "robot_description";  // the parameter holding the URDF
+  std::string robot_urdf_file;                          // a URDF file instead of the parameter
+  double robot_friction = 0.5;
+  std::vector<std::string> robot_ignore_links;
+  std::string robot_frame_prefix;                                // tf frame of link L: prefix + L
+  double robot_max_speed = 5.0, robot_max_angular_speed = 30.0;  // m/s, rad/s
+  // Contacts in rviz: points and forces (N drawn as contact_force_scale m per N).
+  bool contact_markers = false;
+  double contact_force_scale = 0.05;  // m/N
 };
 
 // Parses "topic" | "tf" | "fixed"; throws std::invalid_argument otherwise.

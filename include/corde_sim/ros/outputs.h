@@ -70,6 +70,16 @@ void build_markers(const corde::World& world, const std::vector<GraspView>& gras
                    const MarkerOptions& options, const ros::Time& stamp, bool clear_first,
                    visualization_msgs::MarkerArray* out);
 
+// Contacts of the world's last step (time step h), appended to `out`: namespace `contacts`, id
+// 0, a SPHERE_LIST of the contact points on the obstacle's (or other rod's) surface, red for the
+// contacts that carried a force and grey for those only within the detection margin (deleted
+// when there are none); namespace `contact_forces`, an ARROW per contact that carried a force
+// (ids 0..n-1 in the contact list's order), from the point along the force on the rod,
+// force_scale metres per newton (at most 0.5 m long). Arrows with ids n..previous-1 (the count
+// returned for the last array) are deleted. Returns n.
+int add_contact_markers(const corde::World& world, double force_scale, const MarkerOptions& o,
+                        const ros::Time& stamp, int previous, visualization_msgs::MarkerArray* out);
+
 // Surface strain r |u - uhat| of bending and twist per segment (mean of its orientation
 // elements), for colouring.
 void segment_strains(const corde::Rod& rod, std::vector<double>* strain);

@@ -40,6 +40,7 @@
 #include "corde_sim/ros/output_schedule.h"
 #include "corde_sim/ros/outputs.h"
 #include "corde_sim/ros/pacer.h"
+#include "corde_sim/ros/robot_obstacles.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/validity.h"
 
@@ -97,6 +98,12 @@ class SimNode {
                         bool from_scene, int* segment);
   void wire_grasp(const std::string& name, GraspWiring* w);
   void update_tf_holders();
+  // Robot collision (sim_node_robot.cpp): reads the URDF (throws std::invalid_argument naming the
+  // parameter, file and element), puts the robot's seen links into the world's obstacles (after
+  // a new world: start-up, reset), and follows the links' tf frames between batches of steps.
+  void load_robot();
+  void install_robot();
+  void update_robot();
   // Scripted grasps: sets each holder's goal to the keyframes' pose at t + h, reached at t + h
   // (the holder limits still apply). Allocates nothing.
   void drive_scripted(double t, double h);
@@ -200,7 +207,16 @@ class SimNode {
   std::unique_ptr<dynamic_reconfigure::Server<NodeConfig>> reconfigure_;
   TfFrames tf_frames_;
   RodPaths rod_paths_;
+
+  // Robot links as obstacles, and what was warned about them.
+  RobotObstacles robot_;
+  // Contacts for rod_state: the largest penetration over the steps since the last message.
+  double max_penetration_since_state_ = 0.0;
+  int contact_arrows_ = 0;  // contact force arrows in the last marker array (to delete stale ones)
 };
+
+// A tf transform as an isometry (rotation normalised).
+Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t);
 
 // Steady (monotonic) wall clock in seconds.
 double wall_seconds();
