@@ -148,10 +148,9 @@ TEST(EnergyDrift, FreeRopeOffsetIsOrderH2AndDriftComesFromGyroscopicTerm) {
       const double h = fractions[i] * critical_time_step(rod);
       (k == 0 ? aniso : iso)[i] = run_drift(rod, h, T);
     }
-    std::printf(
-        "free rope, h = %.3f h_crit, %.1f s: offset %.4f drift %+.5f (I3 = 2 I1); "
-        "offset %.4f drift %+.6f (I3 = I1)\n",
-        fractions[i], T, aniso[i].offset, aniso[i].drift, iso[i].offset, iso[i].drift);
+    std::printf("free rope, h = %.3f h_crit, %.1f s: offset %.4f drift %+.5f (I3 = 2 I1); "
+                "offset %.4f drift %+.6f (I3 = I1)\n",
+                fractions[i], T, aniso[i].offset, aniso[i].drift, iso[i].offset, iso[i].drift);
   }
   // Offset: about 21% at 0.5 h_crit (the earlier session's figure), order 2 below.
   EXPECT_GT(aniso[0].offset, 0.15);
@@ -220,10 +219,9 @@ TEST(EnergyDrift, RigidSpinningSegmentGainsEnergyFromExplicitGyroscopicTerm) {
       const double e1 = rod.energies(Vec3::Zero()).kinetic_rotation;
       const double predicted = e_perp0 * (std::pow(1.0 + h * h * omega * omega, n) - 1.0);
       gain[k] = (e1 - e0) / e_perp0;
-      std::printf(
-          "rigid segment, I3/I1 = %.1f, h = %.0e s: transverse energy gain %.6f "
-          "(explicit Euler prediction %.6f)\n",
-          in.z() / in.x(), h, gain[k], predicted / e_perp0);
+      std::printf("rigid segment, I3/I1 = %.1f, h = %.0e s: transverse energy gain %.6f "
+                  "(explicit Euler prediction %.6f)\n",
+                  in.z() / in.x(), h, gain[k], predicted / e_perp0);
       EXPECT_NEAR(e1 - e0, predicted, 1e-9 * e0);
       EXPECT_NEAR(rod.angular_velocities()[0].z(), w3, 1e-9 * w3);
     }
@@ -253,7 +251,7 @@ TEST(EnergyDrift, UndampedCoilingBlowsUpFromGyroscopicGain) {
     bool isotropic;
   };
   const Section s0 = base.section();
-  const double tau_r = 1e-5;               // paper_rope's retardation on bending and twist
+  const double tau_r = 1e-5;  // paper_rope's retardation on bending and twist
   const double gamma_r = tau_r * s0.bend;  // gamma_r = tau E I
   const Case cases[3] = {{"undamped", 0.0, false},
                          {"gamma_r = 10 us E I", gamma_r, false},
@@ -280,8 +278,8 @@ TEST(EnergyDrift, UndampedCoilingBlowsUpFromGyroscopicGain) {
       }
       e_max[c] = std::max(e_max[c], e);
     }
-    std::printf("coiling_50, %s, h = 0.5 h_crit = %.3e s: %s %.2f s, max E %.3f J\n", cases[c].name,
-                h, t_blow[c] > 0.0 ? "blew up at" : "bounded through",
+    std::printf("coiling_50, %s, h = 0.5 h_crit = %.3e s: %s %.2f s, max E %.3f J\n",
+                cases[c].name, h, t_blow[c] > 0.0 ? "blew up at" : "bounded through",
                 t_blow[c] > 0.0 ? t_blow[c] : 20.0, e_max[c]);
   }
   EXPECT_GT(t_blow[0], 5.0);   // the scene's own duration is fine even undamped
