@@ -11,6 +11,16 @@
 
 namespace corde {
 
+// How a step advances the segments' rotations (the nodes always take semi-implicit Euler).
+// kSemiImplicitEuler: the paper's eqs. 37-42, w += h I^-1 (tau - w x I w) with the explicit
+// gyroscopic term, then q += (h/2) q (x) (0, w) renormalised. The explicit gyroscopic term gives
+// a free spinning segment energy every step (|w_perp|^2 grows by 1 + (h Omega)^2).
+// kSplitRotation: a kick by the torques alone, w += h I^-1 tau, then the torque-free rotation of
+// the axisymmetric segment over h in Cayley form (docs/model.md, "Time integration"): it keeps a
+// free segment's kinetic energy and world angular momentum to round-off and the step symplectic.
+enum class Integrator { kSemiImplicitEuler, kSplitRotation };
+constexpr Integrator kDefaultIntegrator = Integrator::kSplitRotation;
+
 struct Energies {
   double stretch = 0.0, bend_twist = 0.0, coupling = 0.0;  // elastic (J)
   double kinetic_translation = 0.0, kinetic_rotation = 0.0;
@@ -103,15 +113,16 @@ class Rod {
 
   // The second half of step(), for a caller that computed the forces (compute_forces at t) and
   // added to them (contacts, add_contact_force): integrates from t to t + h and applies the drives.
-  void integrate(double t, double h);
+  void integrate(double t, double h, Integrator integrator = kDefaultIntegrator);
   // Adds to the node forces of the current step (between compute_forces and integrate).
   void add_step_force(int node, const Vec3& f) { f_[node] += f; }
   // Which contacts the rod takes part in (contact.h).
   ContactOptions& contact_options() { return contact_; }
   const ContactOptions& contact_options() const { return contact_; }
-  // One semi-implicit Euler step (eqs. 37-42) from t to t + h. Allocates nothing. Each drive,
-  // constraint and ghost frame records the reaction it exerted over the step (boundary.h).
-  void step(double t, double h, const Vec3& gravity);
+  // One step from t to t + h: semi-implicit Euler of the nodes (eqs. 37-38) and the segments'
+  // rotations by the chosen integrator. Allocates nothing. Each drive, constraint and ghost frame
+  // records the reaction it exerted over the step (boundary.h).
+  void step(double t, double h, const Vec3& gravity, Integrator integrator = kDefaultIntegrator);
   // The reactions of an equilibrium (after solve_statics): at rest, each support takes what the
   // rest of the rod, gravity and the loads exert on its items at time t: -f, -tau, and for
   // constraints the part of -f across the line or plane (about the axis only the rest is held).
@@ -134,7 +145,7 @@ class Rod {
   // The step's passes (rod.cpp), over blocks of segments [b0, b1): forces and torques at t into
   // f_, tau_; the integrator.
   void forces_block(int b0, int b1, double t, const Vec3& gravity);
-  void integrate_block(int b0, int b1, double h);
+  void integrate_block(int b0, int b1, double h, Integrator integrator);
   void apply_drives(double t_end, double h);
   void drag_block(int node0, int node1);
 

@@ -12,8 +12,6 @@
 
 namespace corde {
 
-enum class Integrator { kSemiImplicitEuler };
-
 struct WorldEnergies {
   Energies total;
   double elastic() const { return total.elastic(); }
@@ -24,7 +22,8 @@ class World {
  public:
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);
   double time_step = 1e-4;  // s
-  Integrator integrator = Integrator::kSemiImplicitEuler;
+  // How the segments' rotations are stepped (rod.h); the nodes always take semi-implicit Euler.
+  Integrator integrator = kDefaultIntegrator;
 
   std::vector<Rod>& rods() { return rods_; }
   const std::vector<Rod>& rods() const { return rods_; }

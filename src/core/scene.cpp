@@ -484,8 +484,12 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   if (auto v = top.find("name")) scene.name = v->string();
   if (auto v = top.find("description")) scene.description = v->string();
   if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
-  if (auto v = top.find("integrator")) v->choice({"semi_implicit_euler"});
-  scene.world.integrator = Integrator::kSemiImplicitEuler;
+  scene.world.integrator = kDefaultIntegrator;
+  if (auto v = top.find("integrator"))
+    scene.world.integrator =
+        v->choice({"semi_implicit_euler", "split_rotation"}) == "semi_implicit_euler"
+            ? Integrator::kSemiImplicitEuler
+            : Integrator::kSplitRotation;
   if (auto v = top.find("duration")) scene.duration = v->positive();
   std::optional<Value> step = top.find("time_step");
   bool step_given = false;

@@ -25,13 +25,13 @@ void World::step() {
   if (obstacles && !obstacle_motions.empty())
     move_obstacles(obstacle_motions, time_, time_step, obstacles.get());
   if (!ContactSystem::needed(*this)) {
-    for (Rod& r : rods_) r.step(time_, time_step, gravity);
+    for (Rod& r : rods_) r.step(time_, time_step, gravity, integrator);
   } else {
     for (Rod& r : rods_) r.compute_forces(time_, gravity);
     // A copy of a world (a snapshot) shares the system until it steps on its own.
     if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
     contacts_->solve(*this, time_step);
-    for (Rod& r : rods_) r.integrate(time_, time_step);
+    for (Rod& r : rods_) r.integrate(time_, time_step, integrator);
   }
   time_ += time_step;
 }

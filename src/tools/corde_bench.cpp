@@ -6,6 +6,8 @@
 // its end node held and its end segment spun about the tangent, under gravity, with stretch and
 // bend/twist internal friction, a force load and a torque load. The step's cost does not depend on
 // the state (no contacts, no iterations), so the figures hold for any scene of that size.
+// BM_RodStep uses the default rotational update (the split rotation); BM_RodStepSemiImplicitEuler
+// the same rod with the paper's explicit gyroscopic term, for the ratio in the same run.
 //
 // Contacts (below): BM_WorldStepNoContact (World::step without anything to collide, against
 // BM_RodStep/100), BM_RopeOnFloorSelfContact (a 1 m rope coiled on a floor, self contact on: time
@@ -99,13 +101,13 @@ void report(benchmark::State& state, int n, std::chrono::steady_clock::duration 
   state.counters["N"] = n;
 }
 
-void BM_RodStep(benchmark::State& state) {
+void rod_step(benchmark::State& state, corde::Integrator integrator) {
   const int n = static_cast<int>(state.range(0));
   BenchRod b = make_rod(n);
   double t = 0.0;
   const auto start = std::chrono::steady_clock::now();
   for (auto _ : state) {
-    b.rod.step(t, b.h, kGravity);
+    b.rod.step(t, b.h, kGravity, integrator);
     t += b.h;
     benchmark::DoNotOptimize(b.rod.positions().data());
     benchmark::DoNotOptimize(b.rod.orientations().data());
@@ -113,6 +115,13 @@ void BM_RodStep(benchmark::State& state) {
   }
   report(state, n, std::chrono::steady_clock::now() - start);
   if (!b.rod.finite()) state.SkipWithError("the rod blew up (non-finite state)");
+}
+
+// Rod::step with the default rotational update (the split rotation), and with the paper's
+// explicit gyroscopic term (semi-implicit Euler, eqs. 37-42) for comparison in the same run.
+void BM_RodStep(benchmark::State& state) { rod_step(state, corde::Integrator::kSplitRotation); }
+void BM_RodStepSemiImplicitEuler(benchmark::State& state) {
+  rod_step(state, corde::Integrator::kSemiImplicitEuler);
 }
 
 void BM_ComputeForces(benchmark::State& state) {
@@ -129,6 +138,7 @@ void BM_ComputeForces(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RodStep)->Arg(50)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RodStepSemiImplicitEuler)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ComputeForces)
     ->Arg(50)
     ->Arg(100)

@@ -255,10 +255,12 @@ TEST(SceneParse, TopLevelKeys) {
   EXPECT_EQ(s.world.gravity, Vec3(0, 1, 0));
   EXPECT_EQ(s.world.time_step, 2e-6);
   EXPECT_EQ(s.duration, 0.5);
-  EXPECT_EQ(
-      parse_scene("rods: [{material: soft_cable, shape: {type: straight}}]", {}, "/x/my_scene.yaml")
-          .name,
-      "my_scene");
+  EXPECT_EQ(s.world.integrator, Integrator::kSemiImplicitEuler);
+  const std::string rods = "rods: [{material: soft_cable, shape: {type: straight}}]";
+  EXPECT_EQ(parse_scene(rods, {}, "/x/my_scene.yaml").name, "my_scene");
+  EXPECT_EQ(parse_scene(rods, {}, "s").world.integrator, Integrator::kSplitRotation);  // default
+  EXPECT_EQ(parse_scene("integrator: split_rotation\n" + rods, {}, "s").world.integrator,
+            Integrator::kSplitRotation);
 }
 
 TEST(SceneParse, Overrides) {

@@ -99,9 +99,10 @@ RefForces reference_forces(const Rod& rod, double t, const Vec3& gravity) {
   return r;
 }
 
-// Semi-implicit Euler of docs/model.md (the paper's eqs. 37-42), then the drives at the end of
+// Semi-implicit Euler of the nodes, the segments' rotations by either integrator of
+// docs/model.md (the paper's eqs. 37-42, or the split rotation), then the drives at the end of
 // the step.
-void reference_step(Rod* rod, double t, double h, const Vec3& gravity) {
+void reference_step(Rod* rod, double t, double h, const Vec3& gravity, Integrator integrator) {
   const RefForces r = reference_forces(*rod, t, gravity);
   const int n = rod->num_segments();
   std::vector<bool> node_kin(n + 1, false), seg_kin(n, false);
@@ -116,11 +117,27 @@ void reference_step(Rod* rod, double t, double h, const Vec3& gravity) {
     if (seg_kin[s]) continue;
     const Eigen::Matrix3d inertia = rod->segment_inertia(s).asDiagonal();
     Vec3& w = rod->angular_velocities()[s];
-    w += h * inertia.inverse() * (r.tau[s] - w.cross(inertia * w));
     Quat& q = rod->orientations()[s];
-    const Quat dq = q * Quat(0.0, w.x(), w.y(), w.z());
-    q.coeffs() += 0.5 * h * dq.coeffs();
-    q.normalize();
+    if (integrator == Integrator::kSemiImplicitEuler) {
+      w += h * inertia.inverse() * (r.tau[s] - w.cross(inertia * w));
+      const Quat dq = q * Quat(0.0, w.x(), w.y(), w.z());
+      q.coeffs() += 0.5 * h * dq.coeffs();
+      q.normalize();
+    } else {
+      // Kick, then the free axisymmetric rotation: the frame turns by the Cayley angle
+      // 2 atan(h |a|/2) about a = I w / I1 and back by 2 atan(h Omega/2) about d3, and (w1, w2)
+      // turns forward by that same angle (here with cos and sin of it).
+      w += h * inertia.inverse() * r.tau[s];
+      const double i1 = inertia(0, 0), i3 = inertia(2, 2);
+      const double omega = (i3 - i1) / i1 * w.z();
+      const Vec3 a(w.x(), w.y(), i3 / i1 * w.z());
+      const double angle_a = 2.0 * std::atan(0.5 * h * a.norm());
+      const double angle_3 = 2.0 * std::atan(0.5 * h * omega);
+      const Quat turn_a =
+          a.norm() > 0.0 ? Quat(Eigen::AngleAxisd(angle_a, a.normalized())) : Quat::Identity();
+      q = (q * turn_a * Quat(Eigen::AngleAxisd(-angle_3, Vec3::UnitZ()))).normalized();
+      w = Eigen::AngleAxisd(angle_3, Vec3::UnitZ()) * w;
+    }
   }
   const double t_end = t + h;
   for (const NodeDrive& d : rod->node_drives()) {
@@ -267,39 +284,72 @@ TEST_F(StepRegression, StepsFollowTheReferenceTrajectory) {
 
   const double h = 0.5 * critical_time_step(rod);
   const Vec3 gravity(0.0, 0.0, -9.81);
-  Rod ref = rod;
   const std::vector<Vec3> x0 = rod.positions();
-  const int steps = 400;
-  double t = 0.0;
-  for (int k = 0; k < steps; ++k, t += h) {
-    rod.step(t, h, gravity);
-    reference_step(&ref, t, h, gravity);
+  const Rod start = rod;
+  for (Integrator integ : {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation}) {
+    Rod run = start, ref = start;
+    const int steps = 400;
+    double t = 0.0;
+    for (int k = 0; k < steps; ++k, t += h) {
+      run.step(t, h, gravity, integ);
+      reference_step(&ref, t, h, gravity, integ);
+    }
+    ASSERT_TRUE(run.finite());
+    double ex = 0.0, ev = 0.0, eq = 0.0, ew = 0.0, vmax = 0.0, wmax = 0.0, moved = 0.0;
+    for (int i = 0; i <= n; ++i) {
+      ex = std::max(ex, (run.positions()[i] - ref.positions()[i]).norm());
+      ev = std::max(ev, (run.velocities()[i] - ref.velocities()[i]).norm());
+      vmax = std::max(vmax, ref.velocities()[i].norm());
+    }
+    for (int s = 0; s < n; ++s) {
+      eq = std::max(eq, (run.orientations()[s].coeffs() - ref.orientations()[s].coeffs()).norm());
+      ew = std::max(ew, (run.angular_velocities()[s] - ref.angular_velocities()[s]).norm());
+      wmax = std::max(wmax, ref.angular_velocities()[s].norm());
+    }
+    for (int i = 0; i <= n; ++i) moved = std::max(moved, (ref.positions()[i] - x0[i]).norm());
+    std::printf(
+        "%s: %d steps of h = %.3g s: |dx| %.2e m, |dv| %.2e (max v %.2e), |dq| %.2e, "
+        "|dw| %.2e (max w %.2e), moved %.2e m\n",
+        integ == Integrator::kSplitRotation ? "split rotation" : "semi-implicit Euler", steps, h,
+        ex, ev, vmax, eq, ew, wmax, moved);
+    const double len = 0.5;
+    EXPECT_LE(ex, 1e-9 * len);
+    EXPECT_LE(ev, 1e-9 * vmax);
+    EXPECT_LE(eq, 1e-9);
+    EXPECT_LE(ew, 1e-9 * wmax);
+    // The run is not trivial: the rod moved and the drives acted.
+    EXPECT_GT(moved, 1e-4);
+    EXPECT_NEAR(run.positions()[n / 2].x(), target.target.x(), 1e-15);
   }
-  ASSERT_TRUE(rod.finite());
-  double ex = 0.0, ev = 0.0, eq = 0.0, ew = 0.0, vmax = 0.0, wmax = 0.0, moved = 0.0;
-  for (int i = 0; i <= n; ++i) {
-    ex = std::max(ex, (rod.positions()[i] - ref.positions()[i]).norm());
-    ev = std::max(ev, (rod.velocities()[i] - ref.velocities()[i]).norm());
-    vmax = std::max(vmax, ref.velocities()[i].norm());
+}
+
+// Rod::integrate after Rod::compute_forces (the path of a world with contacts) is the second half
+// of Rod::step: the same state to the last bit, for either integrator.
+TEST_F(StepRegression, IntegrateAfterComputeForcesIsTheStep) {
+  const int n = 9;
+  Rod start = wavy_rod(n, 1.0);
+  start.ghost_start().active = true;
+  start.ghost_start().frame = start.orientations()[0];
+  start.add_node_drive({NodeDrive::Kind::kFixed, 0, start.positions()[0]});
+  start.add_segment_drive({SegmentDrive::Kind::kSpin, n - 1, start.orientations()[n - 1], 3.0});
+  const double h = 0.5 * critical_time_step(start);
+  const Vec3 gravity(0.0, 0.0, -9.81);
+  for (Integrator integ : {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation}) {
+    Rod a = start, b = start;
+    for (int k = 0; k < 50; ++k) {
+      a.step(k * h, h, gravity, integ);
+      b.compute_forces(k * h, gravity);
+      b.integrate(k * h, h, integ);
+    }
+    for (int i = 0; i <= n; ++i) {
+      EXPECT_EQ(a.positions()[i], b.positions()[i]);
+      EXPECT_EQ(a.velocities()[i], b.velocities()[i]);
+    }
+    for (int s = 0; s < n; ++s) {
+      EXPECT_EQ(a.orientations()[s].coeffs(), b.orientations()[s].coeffs());
+      EXPECT_EQ(a.angular_velocities()[s], b.angular_velocities()[s]);
+    }
   }
-  for (int s = 0; s < n; ++s) {
-    eq = std::max(eq, (rod.orientations()[s].coeffs() - ref.orientations()[s].coeffs()).norm());
-    ew = std::max(ew, (rod.angular_velocities()[s] - ref.angular_velocities()[s]).norm());
-    wmax = std::max(wmax, ref.angular_velocities()[s].norm());
-  }
-  for (int i = 0; i <= n; ++i) moved = std::max(moved, (ref.positions()[i] - x0[i]).norm());
-  std::printf(
-      "%d steps of h = %.3g s: |dx| %.2e m, |dv| %.2e (max v %.2e), |dq| %.2e, "
-      "|dw| %.2e (max w %.2e), moved %.2e m\n",
-      steps, h, ex, ev, vmax, eq, ew, wmax, moved);
-  const double len = 0.5;
-  EXPECT_LE(ex, 1e-9 * len);
-  EXPECT_LE(ev, 1e-9 * vmax);
-  EXPECT_LE(eq, 1e-9);
-  EXPECT_LE(ew, 1e-9 * wmax);
-  // The run is not trivial: the rod moved and the drives acted.
-  EXPECT_GT(moved, 1e-4);
-  EXPECT_NEAR(rod.positions()[n / 2].x(), target.target.x(), 1e-15);
 }
 
 // Rods longer than one block of Rod::step (1024 segments) cross block edges, where forces,
@@ -327,21 +377,25 @@ TEST_F(StepRegression, LongRodAcrossBlockEdgesFollowsTheReference) {
   expect_forces_match(rod, 0.0, gravity);
 
   const double h = 0.5 * critical_time_step(rod);
-  Rod ref = rod;
-  double t = 0.0;
-  for (int k = 0; k < 100; ++k, t += h) {
-    rod.step(t, h, gravity);
-    reference_step(&ref, t, h, gravity);
+  const Rod start = rod;
+  for (Integrator integ : {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation}) {
+    Rod run = start, ref = start;
+    double t = 0.0;
+    for (int k = 0; k < 100; ++k, t += h) {
+      run.step(t, h, gravity, integ);
+      reference_step(&ref, t, h, gravity, integ);
+    }
+    ASSERT_TRUE(run.finite());
+    double ex = 0.0, eq = 0.0;
+    for (int i = 0; i <= n; ++i)
+      ex = std::max(ex, (run.positions()[i] - ref.positions()[i]).norm());
+    for (int s = 0; s < n; ++s)
+      eq = std::max(eq, (run.orientations()[s].coeffs() - ref.orientations()[s].coeffs()).norm());
+    std::printf("N = %d, 100 steps of h = %.3g s: |dx| %.2e m, |dq| %.2e\n", n, h, ex, eq);
+    EXPECT_LE(ex, 1e-9 * 0.5 / n);
+    EXPECT_LE(eq, 1e-9);
+    EXPECT_NEAR(run.positions()[2048].x(), x2048.x() + 0.1 * t, 1e-12);  // the drive acted
   }
-  ASSERT_TRUE(rod.finite());
-  double ex = 0.0, eq = 0.0;
-  for (int i = 0; i <= n; ++i) ex = std::max(ex, (rod.positions()[i] - ref.positions()[i]).norm());
-  for (int s = 0; s < n; ++s)
-    eq = std::max(eq, (rod.orientations()[s].coeffs() - ref.orientations()[s].coeffs()).norm());
-  std::printf("N = %d, 100 steps of h = %.3g s: |dx| %.2e m, |dq| %.2e\n", n, h, ex, eq);
-  EXPECT_LE(ex, 1e-9 * 0.5 / n);
-  EXPECT_LE(eq, 1e-9);
-  EXPECT_NEAR(rod.positions()[2048].x(), x2048.x() + 0.1 * t, 1e-12);  // the drive acted
 }
 
 // Indices are checked when a drive or load is added, so the step itself never checks them.
