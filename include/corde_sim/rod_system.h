@@ -16,7 +16,6 @@
 // be factored by Cholesky.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <vector>
@@ -60,9 +59,9 @@ class BlockTridiagSolver {
   void solve(Eigen::VectorXd* b) const;
 
  private:
-  std::vector<Mat6> l_diag_;   // lower triangular Cholesky factor of each pivot block
-  std::vector<Mat6> l_lower_;  // L(k + 1, k)
-  Eigen::LLT<Mat6> llt_;
+  std::vector<Mat6> l_diag_;    // Cholesky factor of each pivot block (lower triangle used)
+  std::vector<Vec6> inv_diag_;  // inverse of its diagonal
+  std::vector<Mat6> l_lower_;   // L(k + 1, k)
   int blocks_ = 0;
 };
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 
 namespace corde {
 
@@ -109,24 +110,55 @@ Eigen::SparseMatrix<double> BlockTridiag::sparse() const {
 // BlockTridiagSolver: S_0 = A_00, S_k = A_kk - C_{k-1} C_{k-1}^T with L_kk = chol(S_k) and
 // C_k = A_{k+1,k} L_kk^-T.
 
+namespace {
+
+// Cholesky of the 6x6 s (lower triangle read) into l (lower triangle written) and the inverse of
+// its diagonal; false when a pivot l_jj^2 is <= min_pivot (or NaN). Plain loops of fixed trip
+// count, which the compiler unrolls: several times faster than a general LLT at this size.
+bool cholesky6(const Mat6& s, double min_pivot, Mat6* l, Vec6* inv_diag) {
+  for (int j = 0; j < 6; ++j) {
+    double d = s(j, j);
+    for (int k = 0; k < j; ++k) d -= (*l)(j, k) * (*l)(j, k);
+    if (!(d > min_pivot)) return false;
+    const double ljj = std::sqrt(d), inv = 1.0 / ljj;
+    (*l)(j, j) = ljj;
+    (*inv_diag)(j) = inv;
+    for (int i = j + 1; i < 6; ++i) {
+      double v = s(i, j);
+      for (int k = 0; k < j; ++k) v -= (*l)(i, k) * (*l)(j, k);
+      (*l)(i, j) = v * inv;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
 bool BlockTridiagSolver::factor(const BlockTridiag& a, double min_pivot) {
   const int n = a.blocks();
   if (static_cast<int>(l_diag_.size()) < n) {
     l_diag_.resize(n);
     l_lower_.resize(n);
+    inv_diag_.resize(n);
   }
   Mat6 s;
   for (int k = 0; k < n; ++k) {
     s = a.diag[k];
     if (k > 0) s.noalias() -= l_lower_[k - 1] * l_lower_[k - 1].transpose();
-    llt_.compute(s);
-    if (llt_.info() != Eigen::Success) return false;
-    l_diag_[k] = llt_.matrixL();
-    for (int i = 0; i < 6; ++i)
-      if (!(l_diag_[k](i, i) * l_diag_[k](i, i) > min_pivot)) return false;
-    if (k + 1 < n)
-      l_lower_[k] =
-          l_diag_[k].triangularView<Eigen::Lower>().solve(a.lower[k].transpose()).transpose();
+    Mat6& l = l_diag_[k];
+    const Vec6& inv = inv_diag_[k];
+    if (!cholesky6(s, min_pivot, &l, &inv_diag_[k])) return false;
+    if (k + 1 < n) {
+      // C = A_{k+1,k} L^-T: each row c solves L c^T = a^T by forward substitution.
+      Mat6& c = l_lower_[k];
+      const Mat6& ak = a.lower[k];
+      for (int r = 0; r < 6; ++r)
+        for (int j = 0; j < 6; ++j) {
+          double v = ak(r, j);
+          for (int m = 0; m < j; ++m) v -= c(r, m) * l(j, m);
+          c(r, j) = v * inv(j);
+        }
+    }
   }
   blocks_ = n;
   return true;
@@ -138,13 +170,23 @@ void BlockTridiagSolver::solve(Eigen::VectorXd* b) const {
   for (int k = 0; k < n; ++k) {
     y = b->segment<6>(6 * k);
     if (k > 0) y.noalias() -= l_lower_[k - 1] * b->segment<6>(6 * k - 6);
-    l_diag_[k].triangularView<Eigen::Lower>().solveInPlace(y);
+    const Mat6& l = l_diag_[k];
+    for (int j = 0; j < 6; ++j) {
+      double v = y(j);
+      for (int m = 0; m < j; ++m) v -= l(j, m) * y(m);
+      y(j) = v * inv_diag_[k](j);
+    }
     b->segment<6>(6 * k) = y;
   }
   for (int k = n - 1; k >= 0; --k) {
     y = b->segment<6>(6 * k);
     if (k + 1 < n) y.noalias() -= l_lower_[k].transpose() * b->segment<6>(6 * k + 6);
-    l_diag_[k].transpose().triangularView<Eigen::Upper>().solveInPlace(y);
+    const Mat6& l = l_diag_[k];
+    for (int j = 5; j >= 0; --j) {
+      double v = y(j);
+      for (int m = j + 1; m < 6; ++m) v -= l(m, j) * y(m);
+      y(j) = v * inv_diag_[k](j);
+    }
     b->segment<6>(6 * k) = y;
   }
 }

@@ -20,6 +20,8 @@
 // RodSystem::hessian), BM_BandedFactorSolve/N (O(N) block Cholesky of M/h^2 + H and one solve)
 // and BM_SparseLDLTFactorSolve/N (Eigen's SimplicialLDLT on the same matrix, pattern analysed
 // once, as statics used it): the step matrix of an implicit step at h = 2 ms.
+// BM_Statics/N/fd: solve_statics of a steel cantilever sagging under its weight, analytic
+// Hessian (fd = 0) against the former finite-difference Hessian (fd = 1).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
@@ -39,6 +41,7 @@
 #include "corde_sim/rod_system.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/stability.h"
+#include "corde_sim/statics.h"
 #include "corde_sim/world.h"
 
 namespace {
@@ -394,6 +397,32 @@ void BM_SparseLDLTFactorSolve(benchmark::State& state) {
   report(state, n, std::chrono::steady_clock::now() - start);
 }
 
+// A steel cantilever (r = 2 mm, 1 m, ghost clamp) sagging under gravity from straight: the same
+// solve with the analytic Hessian and with the former central differences of the forces.
+void BM_Statics(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Rod rod = make_step_system(n).rod;
+  for (auto& x : rod.positions()) x /= 1.001;
+  for (int s = 0; s < n; ++s) rod.orientations()[s] = rod.orientations()[0];
+  rod.add_node_drive({corde::NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  rod.ghost_start().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  corde::StaticOptions opt;
+  opt.finite_difference_hessian = state.range(1) != 0;
+  corde::StaticResult res;
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    Rod r = rod;
+    res = corde::solve_statics(r, kGravity, 0.0, opt);
+    benchmark::DoNotOptimize(r.positions().data());
+  }
+  report(state, n, std::chrono::steady_clock::now() - start);
+  state.counters["iterations"] = res.iterations;
+  state.counters["force_evaluations"] = res.gradient_evaluations;
+  if (!res.converged) state.SkipWithError("statics did not converge");
+}
+
+BENCHMARK(BM_Statics)->ArgsProduct({{40, 100, 1000}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SystemHessian)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BandedFactorSolve)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SparseLDLTFactorSolve)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
