@@ -22,6 +22,8 @@
 // once, as statics used it): the step matrix of an implicit step at h = 2 ms.
 // BM_Statics/N/fd: solve_statics of a steel cantilever sagging under its weight, analytic
 // Hessian (fd = 0) against the former finite-difference Hessian (fd = 1).
+// BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned at
+// one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
@@ -34,6 +36,7 @@
 #include <utility>
 #include <vector>
 
+#include "corde_sim/implicit_step.h"
 #include "corde_sim/material.h"
 #include "corde_sim/obstacle.h"
 #include "corde_sim/rod.h"
@@ -422,6 +425,43 @@ void BM_Statics(benchmark::State& state) {
   if (!res.converged) state.SkipWithError("statics did not converge");
 }
 
+// A 1 m steel cable (r = 2 mm) pinned at node 0, released horizontal: steps of 2 ms while it
+// swings down (restarted every 200 steps, outside the timing, so that it keeps moving).
+void BM_ImplicitEulerStep(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Rod rod = make_step_system(n).rod;
+  for (auto& x : rod.positions()) x /= 1.001;
+  for (int s = 0; s < n; ++s) rod.orientations()[s] = rod.orientations()[0];
+  rod.add_node_drive({corde::NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  const Rod start_state = rod;
+  corde::ImplicitEuler integrator;
+  const double h = 2e-3;
+  double t = 0.0;
+  long steps = 0, iterations = 0;
+  bool ok = true;
+  const auto start = std::chrono::steady_clock::now();
+  auto excluded = std::chrono::steady_clock::duration::zero();
+  for (auto _ : state) {
+    const corde::ImplicitResult r = integrator.step(rod, t, h, kGravity);
+    ok = ok && r.converged;
+    iterations += r.iterations;
+    t += h;
+    if (++steps % 200 == 0) {
+      state.PauseTiming();
+      const auto p0 = std::chrono::steady_clock::now();
+      rod = start_state;
+      t = 0.0;
+      excluded += std::chrono::steady_clock::now() - p0;
+      state.ResumeTiming();
+    }
+    benchmark::DoNotOptimize(rod.positions().data());
+  }
+  report(state, n, std::chrono::steady_clock::now() - start - excluded);
+  state.counters["newton_per_step"] = steps > 0 ? static_cast<double>(iterations) / steps : 0.0;
+  if (!ok) state.SkipWithError("a step did not converge");
+}
+
+BENCHMARK(BM_ImplicitEulerStep)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Statics)->ArgsProduct({{40, 100, 1000}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SystemHessian)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BandedFactorSolve)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
