@@ -12,8 +12,10 @@
 // semi-definite Hessian variant plus M/h^2 and I/h^2, solved by the O(N) block Cholesky, with a
 // backtracking line search on Phi. New velocities are (x - x^n)/h and theta/h.
 //
-// Not yet: internal friction (the step damps high frequencies numerically instead), drag,
-// external forces and torques, line/plane/hinge constraints (refused), contacts.
+// Loads: gravity, dead force and torque loads at t + h, and the rod's external forces and
+// torques, all held constant over the step. Not yet: internal friction (the step damps high
+// frequencies numerically instead), drag, follower loads and line/plane/hinge constraints
+// (refused), contacts.
 #pragma once
 
 #include <vector>
@@ -41,7 +43,8 @@ class ImplicitEuler {
  public:
   explicit ImplicitEuler(ImplicitOptions options = ImplicitOptions()) : opt_(options) {}
   // Advances the rod from t to t + h (drives set at t + h). Throws std::invalid_argument for a
-  // rod with constraints. The rod is left at the last iterate when Newton did not converge.
+  // rod with constraints or follower loads. The rod is left at the last iterate when Newton did not
+  // converge.
   ImplicitResult step(Rod& rod, double t, double h, const Vec3& gravity);
 
  private:

@@ -45,6 +45,17 @@ double ImplicitEuler::merit(const Rod& rod, const RodSystem& sys, double h) cons
     const Vec3 e = log_body(q0_[s].conjugate() * rod.orientations()[s]) - what_[s];
     phi += 0.5 * inv_h2 * e.dot(rod.segment_inertia(s).cwiseProduct(e));
   }
+  if (rod.has_external())
+    for (int i = 0; i < rod.num_nodes(); ++i)
+      phi -= rod.external_forces()[i].dot(rod.positions()[i]);
+  // Dead torques have no potential; their work over the step, taken along the rotation from the
+  // step's start (as statics does), keeps Phi consistent with the gradient.
+  if (sys.terms & kLoadTerm)
+    for (const Load& l : rod.loads())
+      if (!l.follower && l.kind == Load::Kind::kTorque)
+        phi -= sys.load_scale * l.scale(sys.t) *
+               l.value.dot(q0_[l.index] *
+                           log_body(q0_[l.index].conjugate() * rod.orientations()[l.index]));
   return phi;
 }
 
@@ -60,6 +71,27 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
     g->segment<3>(RodSystem::segment_index(s)) +=
         inv_right_jacobian_t(theta, inv_h2 * rod.segment_inertia(s).cwiseProduct(e));
   }
+  // Dead torques: the gradient of merit()'s work term (their work along the step's rotation),
+  // which differs from minus the body torque R^T T at first order in theta; it keeps the line
+  // search consistent.
+  if (sys.terms & kLoadTerm)
+    for (const Load& l : rod.loads()) {
+      if (l.follower || l.kind != Load::Kind::kTorque) continue;
+      const double f = sys.load_scale * l.scale(sys.t);
+      const int s = l.index;
+      const Vec3 theta = log_body(q0_[s].conjugate() * rod.orientations()[s]);
+      g->segment<3>(RodSystem::segment_index(s)) +=
+          f * (rod.orientations()[s].conjugate() * l.value -
+               inv_right_jacobian_t(theta, q0_[s].conjugate() * l.value));
+    }
+  // External forces and torques (grasps, inputs) as dead loads over the step.
+  if (rod.has_external()) {
+    for (int i = 0; i < rod.num_nodes(); ++i)
+      g->segment<3>(RodSystem::node_index(i)) -= rod.external_forces()[i];
+    for (int s = 0; s < rod.num_segments(); ++s)
+      g->segment<3>(RodSystem::segment_index(s)) -=
+          rod.orientations()[s].conjugate() * rod.external_torques()[s];
+  }
   for (int j = 0; j < g->size(); ++j)
     if (fixed_[j]) (*g)(j) = 0.0;
 }
@@ -68,6 +100,10 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   if (!rod.node_constraints().empty() || !rod.segment_constraints().empty())
     throw std::invalid_argument("implicit step: rod '" + rod.name() +
                                 "' has line, plane or axis constraints, which it does not handle");
+  for (const Load& l : rod.loads())
+    if (l.follower)
+      throw std::invalid_argument("implicit step: rod '" + rod.name() +
+                                  "' has a follower load, which it does not handle");
   const int nn = rod.num_nodes(), ns = rod.num_segments();
   auto& x = rod.positions();
   auto& q = rod.orientations();
