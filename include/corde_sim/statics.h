@@ -4,15 +4,14 @@
 // Unknowns are the free node positions and incremental rotation vectors of the free segments
 // (q <- q (x) exp(theta/2), theta in the body frame). The gradient is the rod's own force
 // computation (forces and body torques with zero velocities, so internal friction vanishes); the
-// Hessian is its central finite difference, coloured so that one perturbation moves every fifth
-// node or segment at once (a DOF only reaches DOFs two nodes/segments away): 2 x 5 x 3 = 30
-// gradient evaluations per Hessian whatever N. Newton steps are solved with a sparse LDLT (a
-// Levenberg shift where the Hessian is not positive definite) and a backtracking line search on
-// the energy. Steps move the nodes through a retraction that turns each chord exactly (rather than
-// adding displacements, which would stretch every turned chord at second order): with a stiff
-// stretch or penalty that keeps Newton at 5-10 iterations even for large rotations in one load
-// step. Each iteration costs O(N). Rotations are scaled by the mean segment length so that all
-// unknowns are lengths and all residuals forces. A residual of ~1e-10 of the loads is reached
+// Hessian is the analytic one of rod_system.h (block tridiagonal, exact second derivative along
+// that retraction). Newton steps are solved in O(N) by the block Cholesky of rod_system.h (a
+// Levenberg shift where the Hessian is not positive definite) with a backtracking line search
+// on the energy. Steps move the nodes through a retraction that turns each chord exactly (rather
+// than adding displacements, which would stretch every turned chord at second order): with a
+// stiff stretch or penalty that keeps Newton at 5-10 iterations even for large rotations in one
+// load step. Each iteration costs O(N). Rotations are scaled by the mean segment length so that
+// all unknowns are lengths and all residuals forces. A residual of ~1e-10 of the loads is reached
 // when the stiffnesses allow; stiff stretch or penalty raise the round-off floor of the forces
 // (reported) to ~1e-8 of the loads.
 #pragma once
@@ -40,6 +39,10 @@ struct StaticOptions {
   // Largest move of one unknown per Newton step: displacement in units of the rod length and
   // rotation in radians.
   double max_step = 0.5;
+  // The Hessian from central differences of the rod's forces (30 force evaluations per Newton
+  // iteration, 60 in static_hessian) instead of the analytic one (rod_system.h): a cross-check,
+  // and the reference of the benchmark.
+  bool finite_difference_hessian = false;
 };
 
 struct StaticResult {
@@ -67,8 +70,8 @@ StaticResult solve_statics(Rod& rod, const Vec3& gravity, double t,
 // current state (kinematic nodes and segments as they are), in the scaled variables above:
 // per node 3 displacements (2 in the plane if options.plane_normal is set), then per segment 3
 // body rotations times the mean segment length (1 in the planar case), node i before segment i.
-// Fourth-order differences (60 force evaluations). Its lowest eigenvalue turns negative where a
-// compressed rod buckles. Velocities are zeroed.
+// Analytic (or, with options.finite_difference_hessian, fourth-order differences of the forces).
+// Its lowest eigenvalue turns negative where a compressed rod buckles. Velocities are zeroed.
 Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double t,
                                            const StaticOptions& options = StaticOptions());
 

@@ -1,12 +1,13 @@
 #include "corde_sim/statics.h"
 
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <utility>
 #include <vector>
+
+#include "corde_sim/rod_system.h"
 
 namespace corde {
 namespace {
@@ -68,6 +69,10 @@ class Problem {
       count_[p] = kin ? 0 : (planar_ ? (node ? 2 : 1) : 3);
       ndof_ += count_[p];
     }
+    // Unknown k of item p sits at 6 (p / 2) + 3 (p % 2) + k of the block layout (rod_system.h).
+    full_.resize(ndof_);
+    for (int p = 0; p <= 2 * n; ++p)
+      for (int k = 0; k < count_[p]; ++k) full_[start_[p] + k] = 3 * p + k;
     for (auto& v : rod_.velocities()) v.setZero();
     for (auto& w : rod_.angular_velocities()) w.setZero();
   }
@@ -230,6 +235,65 @@ class Problem {
     *d /= worst;
   }
 
+  // The Hessian in the block layout of rod_system.h, in the scaled unknowns: each item's 3x3
+  // blocks turned into its basis (the plane's, or the rotation axis first) and scaled by 1/lc
+  // for the rotations, the components that are not unknowns fixed. Analytic, or from
+  // hessian() (central differences) when asked.
+  void system_matrix(BlockTridiag* a) {
+    const int nb = rod_.num_nodes();
+    if (opt_.finite_difference_hessian) {
+      const Eigen::SparseMatrix<double> h = hessian();
+      a->resize(nb);
+      a->set_zero();
+      for (int c = 0; c < h.outerSize(); ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(h, c); it; ++it) {
+          const int i = full_[it.row()], j = full_[it.col()];
+          if (i / 6 == j / 6)
+            a->diag[i / 6](i % 6, j % 6) = it.value();
+          else if (i / 6 == j / 6 + 1)
+            a->lower[j / 6](i % 6, j % 6) = it.value();
+        }
+    } else {
+      RodSystem sys{&rod_, lambda_ * gravity_, t_, lambda_,
+                    kStretchTerm | kCouplingTerm | kBendTwistTerm};
+      sys.hessian(a);  // loads and gravity add nothing to it
+      std::vector<Mat6>& d = a->diag;
+      std::vector<Mat6>& l = a->lower;
+      int nb_done = 0;
+      Mat6 tk, tn;
+      if (!planar_) {  // the map is a diagonal scaling
+        Vec6 sc;
+        sc << 1.0, 1.0, 1.0, 1.0 / lc_, 1.0 / lc_, 1.0 / lc_;
+        for (Mat6& m : d) m = sc.asDiagonal() * m * sc.asDiagonal();
+        for (Mat6& m : l) m = sc.asDiagonal() * m * sc.asDiagonal();
+        nb_done = nb;
+      }
+      if (nb_done == 0) basis_block(0, &tk);
+      for (int k = nb_done; k < nb; ++k) {
+        d[k] = tk.transpose() * d[k] * tk;
+        if (k + 1 < nb) {
+          basis_block(k + 1, &tn);
+          l[k] = tn.transpose() * l[k] * tk;
+          tk = tn;
+        }
+      }
+    }
+    for (int p = 0; p < 2 * nb; ++p)
+      for (int k = p < static_cast<int>(count_.size()) ? count_[p] : 0; k < 3; ++k)
+        a->fix(3 * p + k);
+  }
+
+  // Scatters the residual into the block layout (zero on fixed slots) and back.
+  void to_blocks(const Eigen::VectorXd& r, Eigen::VectorXd* b) const {
+    b->setZero(6 * rod_.num_nodes());
+    for (int i = 0; i < ndof_; ++i) (*b)(full_[i]) = r(i);
+  }
+  void from_blocks(const Eigen::VectorXd& b, Eigen::VectorXd* r) const {
+    r->resize(ndof_);
+    for (int i = 0; i < ndof_; ++i) (*r)(i) = b(full_[i]);
+  }
+  int block_index(int i) const { return full_[i]; }
+
   // Symmetrised central-difference Jacobian of minus the residual, by colours. Second order
   // (30 force evaluations) for Newton; fourth order (60) where the Hessian itself is the result:
   // with a stiff stretch or penalty the second-order stencil's truncation error, K_s h^2 / l^3,
@@ -329,6 +393,27 @@ class Problem {
   }
 
  private:
+  // The 6x6 map from the scaled unknowns of block k (node k, segment k) to its displacement and
+  // body rotation: the node's basis vectors as columns, and the segment's rotation axes (in the
+  // planar case the plane's normal in the body first) over lc.
+  void basis_block(int k, Mat6* t) const {
+    t->setZero();
+    if (!planar_) {
+      t->diagonal() << 1.0, 1.0, 1.0, 1.0 / lc_, 1.0 / lc_, 1.0 / lc_;
+      return;
+    }
+    for (int c = 0; c < 3; ++c) t->block<3, 1>(0, c) = c < 2 ? basis_[c] : normal_;
+    if (k >= rod_.num_segments()) {
+      t->bottomRightCorner<3, 3>().setIdentity();
+      return;
+    }
+    const Vec3 a = axis(k, 0);
+    const Vec3 b = a.unitOrthogonal();
+    t->block<3, 1>(3, 3) = a / lc_;
+    t->block<3, 1>(3, 4) = b / lc_;
+    t->block<3, 1>(3, 5) = a.cross(b) / lc_;
+  }
+
   // Body axis of rotation unknown k of segment s.
   Vec3 axis(int s, int k) const {
     if (!planar_) return Vec3::Unit(k);
@@ -351,7 +436,7 @@ class Problem {
   bool planar_ = false;
   Vec3 normal_ = Vec3::Zero();
   Vec3 basis_[3];
-  std::vector<int> start_, count_;
+  std::vector<int> start_, count_, full_;
   int ndof_ = 0, evaluations_ = 0;
   std::vector<Vec3> x0_, chords_;
   std::vector<Quat> q0_;
@@ -389,7 +474,9 @@ bool newton(Problem* pb, double tol, const StaticOptions& opt, StaticResult* res
   double ref = 0.0;
   Eigen::VectorXd r = pb->residual(&ref);
   double mu_last = 0.0, last_norm = std::numeric_limits<double>::infinity();
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  BlockTridiag h, a;
+  BlockTridiagSolver solver;
+  Eigen::VectorXd b, d;
   const double floor = pb->round_off_floor();
   auto finish = [&](bool stalled) {
     res->residual = r.norm();
@@ -405,25 +492,28 @@ bool newton(Problem* pb, double tol, const StaticOptions& opt, StaticResult* res
     // At the noise floor, stop once an iteration no longer halves the residual.
     if (norm <= floor && norm > 0.5 * last_norm) return finish(true);
     last_norm = norm;
-    const Eigen::SparseMatrix<double> h = pb->hessian();
+    pb->system_matrix(&h);
     ++res->iterations;
     double diag = 0.0;
-    for (int i = 0; i < n; ++i) diag = std::max(diag, std::abs(h.coeff(i, i)));
-    Eigen::SparseMatrix<double> eye(n, n);
-    eye.setIdentity();
+    for (int i = 0; i < n; ++i) {
+      const int j = pb->block_index(i);
+      diag = std::max(diag, std::abs(h.diag[j / 6](j % 6, j % 6)));
+    }
     // Levenberg: the smallest shift (x10 steps) that makes the matrix positive definite and
     // gives a step the line search accepts.
     double mu = mu_last > 1e-12 * diag ? 0.1 * mu_last : 0.0;
     bool ok = false;
     while (!ok && mu <= diag) {
-      ldlt.compute(mu > 0.0 ? Eigen::SparseMatrix<double>(h + mu * eye) : h);
-      ok = ldlt.info() == Eigen::Success;
-      if (ok) {
-        const Eigen::VectorXd& dd = ldlt.vectorD();
-        for (int i = 0; i < n && ok; ++i) ok = dd(i) > 1e-13 * diag;
+      a = h;
+      for (int i = 0; i < n && mu > 0.0; ++i) {
+        const int j = pb->block_index(i);
+        a.diag[j / 6](j % 6, j % 6) += mu;
       }
+      ok = solver.factor(a, 1e-13 * diag);
       if (ok) {
-        Eigen::VectorXd d = ldlt.solve(r);  // H d = -grad = r
+        pb->to_blocks(r, &b);
+        solver.solve(&b);  // H d = -grad = r
+        pb->from_blocks(b, &d);
         pb->cap(&d);
         ok = line_search(pb, d, &r, &ref);
       }
@@ -470,7 +560,22 @@ StaticResult solve_statics(Rod& rod, const Vec3& gravity, double t, const Static
 Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double t,
                                            const StaticOptions& options) {
   Problem pb(rod, gravity, t, options);
-  return pb.hessian(true);
+  if (options.finite_difference_hessian) return pb.hessian(true);
+  BlockTridiag a;
+  pb.system_matrix(&a);
+  const int n = pb.dofs();
+  std::vector<int> reduced(a.size(), -1);
+  for (int i = 0; i < n; ++i) reduced[pb.block_index(i)] = i;
+  std::vector<Eigen::Triplet<double>> trip;
+  const Eigen::SparseMatrix<double> full = a.sparse();
+  for (int c = 0; c < full.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(full, c); it; ++it) {
+      const int i = reduced[it.row()], j = reduced[it.col()];
+      if (i >= 0 && j >= 0) trip.emplace_back(i, j, it.value());
+    }
+  Eigen::SparseMatrix<double> h(n, n);
+  h.setFromTriplets(trip.begin(), trip.end());
+  return h;
 }
 
 }  // namespace corde

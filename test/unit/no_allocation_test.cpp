@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "corde_sim/boundary.h"
+#include "corde_sim/implicit_step.h"
 #include "corde_sim/material.h"
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/world.h"
@@ -83,9 +84,7 @@ void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { releas
 void operator delete(void* p, const std::nothrow_t&) noexcept { release(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { release(p); }
 void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
-void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept {
-  release(p);
-}
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
 
 namespace corde {
 namespace {
@@ -142,6 +141,27 @@ TEST(NoAllocation, WorldStepAllocatesNothing) {
   EXPECT_EQ(count, 0) << "heap allocations during 1000 World::step";
   EXPECT_TRUE(world.finite());
   EXPECT_GT(world.time(), 0.0199);
+}
+
+// The implicit step reuses its buffers after the first step (operator new only: Eigen's dynamic
+// vectors allocate with malloc, which this counter does not see; they keep their sizes here).
+TEST(NoAllocation, ImplicitStepAllocatesNothingAfterTheFirst) {
+  Rod rod = make_rod("implicit", 20, Vec3::Zero());
+  rod.ghost_start().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  rod.add_load({Load::Kind::kForce, 20, Vec3(0.0, 0.1, 0.0), 0.0, 0.05});
+  ImplicitEuler integrator;
+  const Vec3 g(0.0, 0.0, -9.81);
+  integrator.step(rod, 0.0, 1e-3, g);
+  long count = 0;
+  {
+    CountAllocations counter;
+    for (int k = 1; k < 50; ++k) integrator.step(rod, k * 1e-3, 1e-3, g);
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 49 implicit steps";
+  EXPECT_TRUE(rod.finite());
 }
 
 }  // namespace
