@@ -4,10 +4,14 @@ Recorders keep every message of a topic with its arrival time; service helpers w
 call the node's private services; small geometry helpers read poses out of tf and rod_state.
 """
 import math
+import os
+import signal
+import subprocess
 import threading
 import time
 
 import numpy as np
+import roslib.packages
 import rospy
 from geometry_msgs.msg import PoseStamped, TransformStamped
 from std_srvs.srv import SetBool
@@ -278,3 +282,23 @@ class RosoutRecorder(Recorder):
 
     def lines(self, since=None, contains=""):
         return [m.msg for m in self.messages(since) if m.name == self.node and contains in m.msg]
+
+
+def start_node(name, args):
+    """A corde_sim_node named `name` with private parameters `args` (`_key:=value`), in its own
+    process group so that stop_node also ends its children; output captured as text."""
+    # roslib finds the node where roslaunch does; rosrun skips <package>/build, where ours is.
+    cmd = [roslib.packages.find_node("corde_sim", "corde_sim_node")[0], "__name:=" + name]
+    return subprocess.Popen(cmd + args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, start_new_session=True)
+
+
+def stop_node(p):
+    """SIGINT, then SIGKILL after 10 s, to a node started by start_node."""
+    if p.poll() is None:
+        os.killpg(p.pid, signal.SIGINT)
+        try:
+            p.wait(10)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()

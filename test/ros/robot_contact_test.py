@@ -11,7 +11,6 @@ contact and obstacle markers (the obstacle marker where the link is), the ignore
 not taking part (diagnostics). Then nodes started with a broken robot refuse to start and say why.
 """
 import os
-import signal
 import subprocess
 import tempfile
 import threading
@@ -19,14 +18,14 @@ import time
 import unittest
 
 import numpy as np
-import roslib.packages
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from corde_rostest import WAIT, Recorder, Sim, transform_msg, vec, wait_connected
+from corde_rostest import (WAIT, Recorder, Sim, start_node, stop_node, transform_msg, vec,
+                           wait_connected)
 
 RADIUS = 0.01     # m, the rope's (paper_rope)
 BAR = 0.02        # m, the bar's radius
@@ -64,22 +63,6 @@ class Mover:
             ]
             self.pub.publish(m)
             time.sleep(1.0 / RATE)
-
-
-def start_node(name, args):
-    cmd = [roslib.packages.find_node("corde_sim", "corde_sim_node")[0], "__name:=" + name]
-    return subprocess.Popen(cmd + args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, start_new_session=True)
-
-
-def stop_node(p):
-    if p.poll() is None:
-        os.killpg(p.pid, signal.SIGINT)
-        try:
-            p.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
 
 
 class RobotContact(unittest.TestCase):

@@ -2,15 +2,14 @@
 # (Debian's python3 on purpose: it has rospy and the generated messages.)
 """Start-up refusals of corde_sim_node (startup_params.test): each bad parameter makes it exit
 with a non-zero status and a message naming the parameter; good ones start it."""
-import os
-import signal
 import subprocess
 import time
 import unittest
 
-import roslib.packages
 import rospy
 import rostest
+
+import corde_rostest as ct
 
 # (private parameter arguments, text the output must contain)
 BAD = [
@@ -32,23 +31,9 @@ BAD = [
 
 
 def start(name, args, scene):
-    # roslib finds the node where roslaunch does; rosrun skips <package>/build, where ours is.
-    cmd = [roslib.packages.find_node("corde_sim", "corde_sim_node")[0], "__name:=" + name]
     if not any(a.startswith("_scene:=") for a in args):
-        cmd.append("_scene:=" + scene)
-    # Own process group, so that ending it also ends rosrun's child.
-    return subprocess.Popen(cmd + args, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, start_new_session=True)
-
-
-def stop(p):
-    if p.poll() is None:
-        os.killpg(p.pid, signal.SIGINT)
-        try:
-            p.wait(10)
-        except subprocess.TimeoutExpired:
-            os.killpg(p.pid, signal.SIGKILL)
-            p.wait()
+        args = args + ["_scene:=" + scene]
+    return ct.start_node(name, args)
 
 
 class StartupParams(unittest.TestCase):
@@ -64,7 +49,7 @@ class StartupParams(unittest.TestCase):
                 try:
                     out, _ = p.communicate(timeout=max(1.0, end - time.monotonic()))
                 except subprocess.TimeoutExpired:
-                    stop(p)
+                    ct.stop_node(p)
                     self.fail("%s: the node started instead of refusing" % args)
                 self.assertNotEqual(p.returncode, 0, "%s: exit status 0\n%s" % (args, out))
                 self.assertIn(what, out, "%s: the message does not name it" % args)
@@ -73,8 +58,8 @@ class StartupParams(unittest.TestCase):
             self.assertIsNone(good.poll(), "the node with good parameters exited")
         finally:
             for p, _, _ in procs:
-                stop(p)
-            stop(good)
+                ct.stop_node(p)
+            ct.stop_node(good)
 
 
 if __name__ == "__main__":
