@@ -6,7 +6,8 @@ namespace corde {
 
 Rod& World::add_rod(Rod rod) {
   for (const Rod& r : rods_)
-    if (r.name() == rod.name()) throw std::invalid_argument("duplicate rod name '" + r.name() + "'");
+    if (r.name() == rod.name())
+      throw std::invalid_argument("duplicate rod name '" + r.name() + "'");
   rods_.push_back(std::move(rod));
   return rods_.back();
 }
@@ -17,9 +18,7 @@ Rod& World::rod(const std::string& name) {
   throw std::out_of_range("no rod named '" + name + "'");
 }
 
-const Rod& World::rod(const std::string& name) const {
-  return const_cast<World*>(this)->rod(name);
-}
+const Rod& World::rod(const std::string& name) const { return const_cast<World*>(this)->rod(name); }
 
 void World::step() {
   if (obstacles && !obstacle_motions.empty())

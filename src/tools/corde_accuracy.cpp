@@ -81,11 +81,11 @@ int main(int argc, char** argv) {
         const corde::v8::StepResult r = corde::v8::run_step_case(c);
         const double per_sim = r.cpu_seconds / r.simulated_seconds;
         // cpu_per_frame_us: CPU per 2 ms of simulated time, the unit of docs/peers.md's tables.
-        std::fprintf(
-            out, "split_rotation,%s,%d,%g,%.6e,%ld,%.6f,%.6f,%.6e,%.4f,%.6e,%.6e,%.6e,%.6e\n",
-            ghost ? "ghost" : "natural", c.elements, f, r.h, r.steps, r.simulated_seconds,
-            r.cpu_seconds, per_sim, per_sim * 2e-3 * 1e6, r.error_rms, r.error_max,
-            r.error_rms_timoshenko, r.error_rms * r.delta);
+        std::fprintf(out,
+                     "split_rotation,%s,%d,%g,%.6e,%ld,%.6f,%.6f,%.6e,%.4f,%.6e,%.6e,%.6e,%.6e\n",
+                     ghost ? "ghost" : "natural", c.elements, f, r.h, r.steps, r.simulated_seconds,
+                     r.cpu_seconds, per_sim, per_sim * 2e-3 * 1e6, r.error_rms, r.error_max,
+                     r.error_rms_timoshenko, r.error_rms * r.delta);
         std::fflush(out);
         std::fprintf(stderr,
                      "%-7s N=%3d h=%.3g (%.2f crit): error %.3e (Timoshenko %.3e), "

@@ -6,12 +6,12 @@
 //  1. An undamped free rod given a random perturbation "gains" about 20% energy at h = 0.5 h_crit.
 //     Most of that is not drift. Symplectic Euler keeps a modified energy, which for a mode of
 //     frequency omega is I = v^2 + omega^2 x^2 - h omega^2 x v (per unit mass). A random state has
-//     x v ~ 0, so it starts with E = I/2. Along the orbit E averages I/2 / (1 - a^2/4), a = omega h,
-//     which is higher by a^2 / (4 - a^2). That is 1/3 at a = 1 (the stretch mode at the top of the
-//     spectrum when h = 0.5 h_crit). The energy jumps by this O(h^2) offset within a few periods of
-//     the fast modes and then stays flat: the translational update alone, and the whole rod with
-//     isotropic segment inertia, show no drift. What remains is a slow secular drift of order h.
-//     It comes from the explicit gyroscopic term w x I w of the rotational update
+//     x v ~ 0, so it starts with E = I/2. Along the orbit E averages I/2 / (1 - a^2/4), a = omega
+//     h, which is higher by a^2 / (4 - a^2). That is 1/3 at a = 1 (the stretch mode at the top of
+//     the spectrum when h = 0.5 h_crit). The energy jumps by this O(h^2) offset within a few
+//     periods of the fast modes and then stays flat: the translational update alone, and the whole
+//     rod with isotropic segment inertia, show no drift. What remains is a slow secular drift of
+//     order h. It comes from the explicit gyroscopic term w x I w of the rotational update
 //     (docs/model.md: w += h I^-1 (tau - w x I w)), which is not symplectic. With a rod segment's
 //     axisymmetric inertia (I3 = 2 I1) that drift is a loss in the free-rod case below.
 //  2. A free rigid segment spinning about its axis shows the same term directly. Explicit Euler on
@@ -148,9 +148,10 @@ TEST(EnergyDrift, FreeRopeOffsetIsOrderH2AndDriftComesFromGyroscopicTerm) {
       const double h = fractions[i] * critical_time_step(rod);
       (k == 0 ? aniso : iso)[i] = run_drift(rod, h, T);
     }
-    std::printf("free rope, h = %.3f h_crit, %.1f s: offset %.4f drift %+.5f (I3 = 2 I1); "
-                "offset %.4f drift %+.6f (I3 = I1)\n",
-                fractions[i], T, aniso[i].offset, aniso[i].drift, iso[i].offset, iso[i].drift);
+    std::printf(
+        "free rope, h = %.3f h_crit, %.1f s: offset %.4f drift %+.5f (I3 = 2 I1); "
+        "offset %.4f drift %+.6f (I3 = I1)\n",
+        fractions[i], T, aniso[i].offset, aniso[i].drift, iso[i].offset, iso[i].drift);
   }
   // Offset: about 21% at 0.5 h_crit (the earlier session's figure), order 2 below.
   EXPECT_GT(aniso[0].offset, 0.15);
@@ -219,9 +220,10 @@ TEST(EnergyDrift, RigidSpinningSegmentGainsEnergyFromExplicitGyroscopicTerm) {
       const double e1 = rod.energies(Vec3::Zero()).kinetic_rotation;
       const double predicted = e_perp0 * (std::pow(1.0 + h * h * omega * omega, n) - 1.0);
       gain[k] = (e1 - e0) / e_perp0;
-      std::printf("rigid segment, I3/I1 = %.1f, h = %.0e s: transverse energy gain %.6f "
-                  "(explicit Euler prediction %.6f)\n",
-                  in.z() / in.x(), h, gain[k], predicted / e_perp0);
+      std::printf(
+          "rigid segment, I3/I1 = %.1f, h = %.0e s: transverse energy gain %.6f "
+          "(explicit Euler prediction %.6f)\n",
+          in.z() / in.x(), h, gain[k], predicted / e_perp0);
       EXPECT_NEAR(e1 - e0, predicted, 1e-9 * e0);
       EXPECT_NEAR(rod.angular_velocities()[0].z(), w3, 1e-9 * w3);
     }
@@ -251,7 +253,7 @@ TEST(EnergyDrift, UndampedCoilingBlowsUpFromGyroscopicGain) {
     bool isotropic;
   };
   const Section s0 = base.section();
-  const double tau_r = 1e-5;  // paper_rope's retardation on bending and twist
+  const double tau_r = 1e-5;               // paper_rope's retardation on bending and twist
   const double gamma_r = tau_r * s0.bend;  // gamma_r = tau E I
   const Case cases[3] = {{"undamped", 0.0, false},
                          {"gamma_r = 10 us E I", gamma_r, false},
@@ -278,8 +280,8 @@ TEST(EnergyDrift, UndampedCoilingBlowsUpFromGyroscopicGain) {
       }
       e_max[c] = std::max(e_max[c], e);
     }
-    std::printf("coiling_50, %s, h = 0.5 h_crit = %.3e s: %s %.2f s, max E %.3f J\n",
-                cases[c].name, h, t_blow[c] > 0.0 ? "blew up at" : "bounded through",
+    std::printf("coiling_50, %s, h = 0.5 h_crit = %.3e s: %s %.2f s, max E %.3f J\n", cases[c].name,
+                h, t_blow[c] > 0.0 ? "blew up at" : "bounded through",
                 t_blow[c] > 0.0 ? t_blow[c] : 20.0, e_max[c]);
   }
   EXPECT_GT(t_blow[0], 5.0);   // the scene's own duration is fine even undamped
