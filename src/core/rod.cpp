@@ -485,11 +485,13 @@ CORDE_VECTOR_CLONES void segment_split_rotation_pass(int s0, int s1, double h,
     const double ry = qw * py + qy * pw + (qz * px - qx * pz);
     const double rz = qw * pz + qz * pw + (qx * py - qy * px);
     const double rw = qw * pw - (qx * px + qy * py + qz * pz);
+    // A kinematic segment's frame is left exactly as its drive set it (not renormalised).
     const double inv_norm = 1.0 / std::sqrt(rx * rx + ry * ry + rz * rz + rw * rw);
-    qs[0] = rx * inv_norm;
-    qs[1] = ry * inv_norm;
-    qs[2] = rz * inv_norm;
-    qs[3] = rw * inv_norm;
+    const double scale = seg_free[s] * inv_norm + (1.0 - seg_free[s]);
+    qs[0] = rx * scale;
+    qs[1] = ry * scale;
+    qs[2] = rz * scale;
+    qs[3] = rw * scale;
   }
 }
 
