@@ -33,7 +33,7 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
     names.push_back(std::filesystem::path(f).stem().string());
   for (const char* want : {"default", "coiling_50", "coiling_100", "coiling_1000",
                            "preshaped_spring", "preshaped_wire", "thread", "helical_buckling",
-                           "plectoneme", "lift_and_lay", "rope_pendulum_air"})
+                           "plectoneme", "lift_and_lay", "rope_pendulum_air", "gripper_sweep"})
     EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
 }
 
