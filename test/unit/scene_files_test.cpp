@@ -31,10 +31,11 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
   std::vector<std::string> names;
   for (const std::string& f : scene_files())
     names.push_back(std::filesystem::path(f).stem().string());
-  for (const char* want : {"default", "coiling_50", "coiling_100", "coiling_1000",
-                           "preshaped_spring", "preshaped_wire", "thread", "helical_buckling",
-                           "plectoneme", "plectoneme_contact", "lift_and_lay", "rope_pendulum_air",
-                           "drape_table", "rod_stack", "rope_pile", "overhand_knot"})
+  for (const char* want :
+       {"default", "coiling_50", "coiling_100", "coiling_1000", "preshaped_spring",
+        "preshaped_wire", "thread", "helical_buckling", "plectoneme", "plectoneme_contact",
+        "lift_and_lay", "rope_pendulum_air", "drape_table", "rod_stack", "rope_pile",
+        "overhand_knot", "gripper_sweep"})
     EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
 }
 
