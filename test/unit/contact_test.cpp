@@ -9,9 +9,12 @@
 #include "corde_sim/scene.h"
 #include "corde_sim/segment_distance.h"
 #include "corde_sim/world.h"
+#include "dynamics_util.h"
 
 namespace corde {
 namespace {
+
+using dyn::mean_velocity;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -74,16 +77,6 @@ std::string rope_on_plane(double tilt_deg, double mu, double elements = 20) {
                 up_normal.x(), up_normal.z(), mu, static_cast<int>(elements), r, start.x(),
                 start.z(), down.x(), down.z(), l);
   return buf;
-}
-
-Vec3 mean_velocity(const Rod& rod) {
-  Vec3 v = Vec3::Zero();
-  double m = 0.0;
-  for (int i = 0; i < rod.num_nodes(); ++i) {
-    v += rod.node_masses()[i] * rod.velocities()[i];
-    m += rod.node_masses()[i];
-  }
-  return v / m;
 }
 
 // Static friction holds a rope on a slope with tan(theta) < mu; with tan(theta) > mu it slides

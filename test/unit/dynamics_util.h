@@ -132,6 +132,32 @@ inline double peak_frequency(const std::vector<double>& x, double dt, double f_l
   return (static_cast<double>(k) + delta) * df;
 }
 
+// Elastic plus kinetic energy (no gravity): what an undamped free rod conserves.
+inline double total_energy(const Rod& rod) {
+  const Energies e = rod.energies(Vec3::Zero());
+  return e.elastic() + e.kinetic();
+}
+
+// paper_rope material (E = G = 0.5 MPa, E_s = 20 MPa, rho = 1300, r = 1 cm; I3 = 2 I1) without
+// friction.
+inline Section undamped_rope_section() {
+  Material m = material_preset("paper_rope").material;
+  m.gamma_t = 0.0;
+  m.gamma_r = 0.0;
+  return make_section(m, 0.01);
+}
+
+// The velocity of the rod's centre of mass.
+inline Vec3 mean_velocity(const Rod& rod) {
+  Vec3 v = Vec3::Zero();
+  double m = 0.0;
+  for (int i = 0; i < rod.num_nodes(); ++i) {
+    v += rod.node_masses()[i] * rod.velocities()[i];
+    m += rod.node_masses()[i];
+  }
+  return v / m;
+}
+
 // Observed order of convergence from errors at N and 2N.
 inline double observed_order(double err_n, double err_2n) {
   return std::log(std::abs(err_n) / std::abs(err_2n)) / std::log(2.0);

@@ -34,24 +34,15 @@
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/stability.h"
+#include "dynamics_util.h"
 
 namespace corde {
 namespace {
 
+using dyn::total_energy;
+using dyn::undamped_rope_section;
+
 constexpr Integrator kPaper = Integrator::kSemiImplicitEuler;
-
-double total_energy(const Rod& rod) {
-  const Energies e = rod.energies(Vec3::Zero());
-  return e.elastic() + e.kinetic();
-}
-
-// paper_rope material (E = G = 0.5 MPa, E_s = 20 MPa, rho = 1300, r = 1 cm) without friction.
-Section undamped_rope_section() {
-  Material m = material_preset("paper_rope").material;
-  m.gamma_t = 0.0;
-  m.gamma_r = 0.0;
-  return make_section(m, 0.01);
-}
 
 // Free straight rope, 1 m, N = 20, with a seeded random perturbation of positions (1 mm),
 // orientations (up to 0.05 rad), velocities (5 cm/s) and angular velocities (1 rad/s).

@@ -15,9 +15,12 @@
 #include "corde_sim/scene.h"
 #include "corde_sim/segment_distance.h"
 #include "corde_sim/world.h"
+#include "dynamics_util.h"
 
 namespace corde {
 namespace {
+
+using dyn::mean_velocity;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kG = 9.81;
@@ -54,16 +57,6 @@ double winding(const Rod& rod, const Link& l) {
     total += std::atan2(ax * bz - az * bx, ax * bx + az * bz);
   }
   return total;
-}
-
-Vec3 mean_velocity(const Rod& rod) {
-  Vec3 v = Vec3::Zero();
-  double m = 0.0;
-  for (int i = 0; i < rod.num_nodes(); ++i) {
-    v += rod.node_masses()[i] * rod.velocities()[i];
-    m += rod.node_masses()[i];
-  }
-  return v / m;
 }
 
 // Checks of a sweep, every step, against the link's exact trajectory: the deepest overlap of the

@@ -15,25 +15,16 @@
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/stability.h"
+#include "dynamics_util.h"
 
 namespace corde {
 namespace {
 
+using dyn::total_energy;
+using dyn::undamped_rope_section;
+
 const char* name(Integrator i) {
   return i == Integrator::kSplitRotation ? "split rotation" : "semi-implicit Euler";
-}
-
-double total_energy(const Rod& rod) {
-  const Energies e = rod.energies(Vec3::Zero());
-  return e.elastic() + e.kinetic();
-}
-
-// paper_rope (E = G = 0.5 MPa, E_s = 20 MPa, rho = 1300, r = 1 cm; I3 = 2 I1) without friction.
-Section undamped_rope_section() {
-  Material m = material_preset("paper_rope").material;
-  m.gamma_t = 0.0;
-  m.gamma_r = 0.0;
-  return make_section(m, 0.01);
 }
 
 // A free rigid segment (N = 1, no stretch or coupling stiffness: no forces, no torques) on a tilted
