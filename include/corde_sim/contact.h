@@ -20,6 +20,7 @@
 
 namespace corde {
 
+class ImplicitEuler;
 class Rod;
 class World;
 
@@ -37,6 +38,12 @@ struct ContactSettings {
   double skin = 0.05;           // extra detection distance, a fraction of the rod radius
   double push_out = 0.2;        // fraction of a penetration removed per step (Baumgarte)
   double max_push_speed = 0.5;  // m/s, cap on the separating speed that removes penetration
+  // Implicit integrator: rounds of sweeps, each followed by the rods' true (stiffness-coupled)
+  // response to the impulses (ContactSystem::solve_implicit).
+  int implicit_rounds = 30;          // at most
+  double implicit_tolerance = 1e-3;  // rounds stop once no contact closes past its target by more
+                                     // than this fraction of the rod's radius over the step
+  double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change
 };
 
 struct Contact {
@@ -74,8 +81,21 @@ class ContactSystem {
   // Called between the forces (Rod::compute_forces at t) and the integration: adds the contact
   // forces p / h to the rods' node forces.
   void solve(World& world, double h);
+  // The same for the implicit integrator, called after every rod took its implicit step without
+  // contacts (steppers[r] for rod r): detection at the step's start against those velocities, then
+  // rounds of Gauss-Seidel sweeps (with each node's own mass, which responds more than the stiff
+  // rod does, so impulses approach from below) each followed by every touched rod's linearised
+  // response to the impulses so far (ImplicitEuler::respond: the compliance of the step's own
+  // factorisation), which leaves the rods at their final state.
+  void solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers);
 
   const std::vector<Contact>& contacts() const { return contacts_; }
+  // Implicit integrator: the node impulses rod r received in the last step (null if none).
+  const std::vector<Vec3>* last_impulses(int r) const {
+    return r < static_cast<int>(last_impulse_.size()) && !last_impulse_[r].empty()
+               ? &last_impulse_[r]
+               : nullptr;
+  }
   const ContactStats& stats() const { return stats_; }
 
  private:
@@ -84,6 +104,11 @@ class ContactSystem {
   bool pair_list_valid(const World& world) const;
   void build_pair_list(const World& world);
   void warm_start();
+  void prepare_sweeps();  // per-contact inverse masses; warm impulses into the velocities
+  void apply_impulse(const Contact& c, const Vec3& p);
+  void sweep(const ContactSettings& cs, double h, int iterations);
+  void finish(World& world, double h, bool add_forces);
+  static double normal_target(const Contact& c, const ContactSettings& cs, double h);
 
   std::vector<Contact> contacts_;
   ContactStats stats_;
@@ -91,6 +116,9 @@ class ContactSystem {
   std::vector<std::vector<Vec3>> velocity_;  // per rod: predicted node velocities
   std::vector<std::vector<double>> inv_mass_;
   std::vector<double> scratch_w_;  // per contact: the pair's inverse mass
+  std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
+  std::vector<char> touched_;
+  std::vector<std::vector<Vec3>> last_impulse_;  // implicit: per rod, the last step's totals
   std::vector<SegmentContact> found_;
   std::vector<int> which_;
   struct CellEntry {
@@ -122,6 +150,7 @@ class ContactSystem {
     Vec3 pt;
   };
   std::vector<Previous> previous_;
+  std::vector<Previous> old_;  // implicit: the impulses before a round's sweeps
 };
 
 }  // namespace corde

@@ -1,21 +1,29 @@
-// Backward (implicit) Euler step of one rod without contacts: a first stiff-stable integrator on
-// the shared rod system (rod_system.h). Not wired into scenes yet.
+// Backward (implicit) Euler step of one rod on the shared rod system (rod_system.h): stable at
+// steps far beyond the explicit limit. World::step runs it for Integrator::kImplicitEuler, with
+// contacts applied through respond().
 //
 // The step from t to t + h minimises the incremental potential
 //   Phi = sum_i m_i/(2h^2) |x_i - x_i^n - h v_i^n|^2
-//       + sum_s 1/(2h^2) (theta_s - h w_s^n)^T I_s (theta_s - h w_s^n) + E(x, q)
+//       + sum_s 1/(2h^2) (theta_s - h w_s^n)^T I_s (theta_s - h w_s^n) + E(x, q) + D(x, q) - W
 // over the node positions x and the segment rotations q = q^n (x) exp(theta/2) (theta the body
-// rotation vector over the step), E the elastic energy, gravity and dead loads at t + h. Its
-// stationarity conditions are backward Euler for the nodes and, to first order in theta, for the
-// rotations (the gyroscopic term w x I w is left out: for the thin sections of rods it is small
-// and its effect is bounded). Newton iterations on the increments (dx, dtheta) use the positive
-// semi-definite Hessian variant plus M/h^2 and I/h^2, solved by the O(N) block Cholesky, with a
-// backtracking line search on Phi. New velocities are (x - x^n)/h and theta/h.
+// rotation vector over the step), E the elastic energy and gravity at t + h, W the work of the
+// loads, D the dissipation potential of internal friction and drag. Its stationarity conditions
+// are backward Euler for the nodes and, to first order in theta, for the rotations (the
+// gyroscopic term w x I w is left out: for the thin sections of rods it is small and its effect
+// is bounded). Newton iterations on the increments (dx, dtheta) use the positive semi-definite
+// Hessian variant plus M/h^2 and I/h^2, solved by the O(N) block Cholesky, with a backtracking
+// line search on Phi. New velocities are (x - x^n)/h and theta/h.
 //
-// Loads: gravity, dead force and torque loads at t + h, and the rod's external forces and
-// torques, all held constant over the step. Not yet: internal friction (the step damps high
-// frequencies numerically instead), drag, follower loads and line/plane/hinge constraints
-// (refused), contacts.
+// Dissipation, linear in the step's velocities with directions taken at the step's start (so it
+// is quadratic in the unknowns and never adds energy): internal friction along each chord's
+// tangent (gamma_t / l (t . (dx_{s+1} - dx_s))^2 / 2h) and on the world angular velocity
+// difference of neighbouring segments (gamma_r / l |R_{s+1} theta_{s+1} - R_s theta_s|^2 / 2h),
+// both zero for rigid motion as in the explicit force; air drag with its coefficients at the
+// step's start velocity. Loads: gravity, dead forces and torques at t + h; follower loads, the
+// rod's external forces and torques, all taken in the world at the step's start and held.
+// Kinematic nodes and segments are set to their drives at t + h and held; line and plane
+// constraints on nodes and axis constraints on segments restrict their increments by
+// projection. Each support records its reaction (the residual force or torque it takes).
 #pragma once
 
 #include <vector>
@@ -42,23 +50,67 @@ struct ImplicitResult {
 class ImplicitEuler {
  public:
   explicit ImplicitEuler(ImplicitOptions options = ImplicitOptions()) : opt_(options) {}
-  // Advances the rod from t to t + h (drives set at t + h). Throws std::invalid_argument for a
-  // rod with constraints or follower loads. The rod is left at the last iterate when Newton did not
-  // converge.
-  ImplicitResult step(Rod& rod, double t, double h, const Vec3& gravity);
+  // Advances the rod from t to t + h (drives set at t + h). The rod is left at the last iterate
+  // when Newton did not converge. predicted: node impulses expected from contacts over the step
+  // (the last step's), applied as forces p / h so that the step starts near its result with
+  // contacts; respond() takes the total impulses and applies only the difference.
+  ImplicitResult step(Rod& rod, double t, double h, const Vec3& gravity,
+                      const std::vector<Vec3>* predicted = nullptr);
+
+  // After step(): sets the rod to the step's result plus the response to node impulses p (N s,
+  // world, one per node; applied as forces p / h over the step), linearised at the step's end
+  // with its Hessian: dx = A^-1 p / h, A = M / h^2 + the Hessian of E + D. The rotations follow
+  // through the coupling of A. Kinematic and constrained items respond only where they are free.
+  // Calling it again replaces the previous response.
+  void respond(Rod& rod, const std::vector<Vec3>& impulses, double h);
+  // The node velocity changes that respond() would add for these impulses, without changing the
+  // rod (dv = A^-1 p / h^2).
+  void response(const Rod& rod, const std::vector<Vec3>& impulses, double h, std::vector<Vec3>* dv);
+  bool has_prediction() const { return !predicted_.empty(); }
+  // The state at the start of the last step.
+  const std::vector<Vec3>& start_positions() const { return x0_; }
+  const std::vector<Vec3>& start_velocities() const { return v0_; }
+  const ImplicitOptions& options() const { return opt_; }
+  void set_options(const ImplicitOptions& o) { opt_ = o; }
 
  private:
+  void setup_supports(Rod& rod, double t1);
+  void setup_dissipation(const Rod& rod, double h);
+  void setup_loads(const Rod& rod, double t1);
   double merit(const Rod& rod, const RodSystem& sys, double h) const;
   void gradient(const Rod& rod, const RodSystem& sys, double h, Eigen::VectorXd* g);
+  void assemble(const Rod& rod, const RodSystem& sys, double h);
+  void project_gradient(Eigen::VectorXd* g) const;
+  void record_reactions(Rod& rod);
+  bool ensure_factor(const Rod& rod, double h);
+  void solve_impulses(const std::vector<Vec3>& impulses, double h);  // into z_
 
   ImplicitOptions opt_;
-  std::vector<Vec3> x0_, xhat_, xk_;
+  std::vector<Vec3> x0_, v0_, xhat_;
+  std::vector<Vec3> gth_;  // per segment: d Phi / d theta (scratch)
   std::vector<Quat> q0_, qk_;
   std::vector<Vec3> what_;   // h w^n per segment (body)
-  std::vector<char> fixed_;  // per unknown of the block layout
+  std::vector<Vec3> theta_;  // the current iterate's rotation over the step, per segment (body)
+  // Per 3-component unknown u (node i: 2i, segment s: 2s + 1): 0 free, 1 held, 2 projected by
+  // proj_[u] (the directions it may move in).
+  std::vector<signed char> kind_;
+  std::vector<Mat3> proj_;
+  // Dissipation frozen at the step's start.
+  std::vector<Vec3> tangent_;   // per segment: unit chord
+  std::vector<double> chord0_;  // per segment: t . (x_{s+1} - x_s) at the start
+  std::vector<Mat3> rot0_;      // per segment: R^n
+  std::vector<Mat3> drag_;      // per node: drag matrix D_i (N s / m)
+  bool friction_t_ = false, friction_r_ = false, drag_on_ = false;
+  // Loads held over the step (world): forces on nodes, torques on segments.
+  std::vector<std::pair<int, Vec3>> forces_, torques_;
+  std::vector<Vec3> predicted_;  // node impulses the step included (empty: none)
   BlockTridiag a_;
   BlockTridiagSolver solver_;
-  Eigen::VectorXd g_, g_trial_, d_;
+  bool factored_ = false;  // solver_ holds a factorisation from this step
+  Eigen::VectorXd g_, g_trial_, d_, z_;
+  // The step's result without contacts (for respond()).
+  std::vector<Vec3> x_free_, v_free_, w_free_;
+  std::vector<Quat> q_free_;
 };
 
 }  // namespace corde

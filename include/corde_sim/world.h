@@ -6,11 +6,19 @@
 #include <vector>
 
 #include "corde_sim/contact.h"
+#include "corde_sim/implicit_step.h"
 #include "corde_sim/obstacle.h"
 #include "corde_sim/obstacle_motion.h"
 #include "corde_sim/rod.h"
 
 namespace corde {
+
+// The implicit integrator's Newton solves over the last step (Integrator::kImplicitEuler).
+struct ImplicitStats {
+  int iterations = 0;           // Newton iterations, the most any rod took
+  int unconverged = 0;          // rods whose Newton iterations stopped short of the tolerance
+  double worst_residual = 0.0;  // largest residual over its reference scale (ImplicitResult)
+};
 
 struct WorldEnergies {
   Energies total;
@@ -22,8 +30,11 @@ class World {
  public:
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);
   double time_step = 1e-4;  // s
-  // How the segments' rotations are stepped (rod.h); the nodes always take semi-implicit Euler.
+  // How the rods are stepped (rod.h): the explicit methods (nodes by semi-implicit Euler, the
+  // segments' rotations as named), or backward Euler of everything (kImplicitEuler).
   Integrator integrator = kDefaultIntegrator;
+  // Newton settings of the implicit integrator.
+  ImplicitOptions implicit;
 
   std::vector<Rod>& rods() { return rods_; }
   const std::vector<Rod>& rods() const { return rods_; }
@@ -41,10 +52,14 @@ class World {
 
   double time() const { return time_; }
   void set_time(double t) { time_ = t; }
-  // Advances every rod by time_step: keyframed obstacles are posed first; a world without
-  // anything to collide runs each rod's fused step; otherwise forces of every rod, then contacts
-  // (detection and the constraint solve), then the integration and the drives.
+  // Advances every rod by time_step: keyframed obstacles are posed first; with an explicit
+  // integrator a world without anything to collide runs each rod's fused step, otherwise forces
+  // of every rod, then contacts (detection and the constraint solve), then the integration and
+  // the drives. With the implicit one every rod takes its backward Euler step, then contacts are
+  // solved against those steps (ContactSystem::solve_implicit).
   void step();
+  // The implicit integrator's solves in the last step (zero for the explicit methods).
+  const ImplicitStats& implicit_stats() const { return implicit_stats_; }
   // The contact stage of the last step (null until a step needed it).
   const ContactSystem* contacts() const { return contacts_.get(); }
   void step(int n) {
@@ -57,6 +72,9 @@ class World {
   std::vector<Rod> rods_;
   double time_ = 0.0;
   std::shared_ptr<ContactSystem> contacts_;
+  std::vector<ImplicitEuler> implicit_;  // per rod (scratch and the step's factorisation)
+  ImplicitStats implicit_stats_;
+  void step_implicit();
 };
 
 }  // namespace corde

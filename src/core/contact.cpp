@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "corde_sim/implicit_step.h"
 #include "corde_sim/segment_distance.h"
 #include "corde_sim/world.h"
 
@@ -77,18 +78,168 @@ void ContactSystem::solve(World& world, double h) {
   }
   detect(world, h);
   warm_start();
+  prepare_sweeps();
+  sweep(world.contact, h, world.contact.iterations);
+  finish(world, h, true);
+}
+
+void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers) {
+  auto& rods = world.rods();
+  const int nr = static_cast<int>(rods.size());
+  velocity_.resize(nr);
+  inv_mass_.resize(nr);
+  // Each rod's velocities after its step without contacts; detection at the step's start.
+  held_x_.resize(nr);
+  held_v_.resize(nr);
+  for (int r = 0; r < nr; ++r) {
+    Rod& rod = rods[r];
+    const int nn = rod.num_nodes();
+    velocity_[r] = rod.velocities();
+    auto& w = inv_mass_[r];
+    w.resize(nn);
+    for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
+    for (const NodeDrive& d : rod.node_drives()) w[d.node] = 0.0;
+    held_x_[r].swap(rod.positions());
+    held_v_[r].swap(rod.velocities());
+    rod.positions() = steppers[r].start_positions();
+    rod.velocities() = steppers[r].start_velocities();
+  }
+  detect(world, h);
+  for (int r = 0; r < nr; ++r) {
+    rods[r].positions().swap(held_x_[r]);
+    rods[r].velocities().swap(held_v_[r]);
+  }
+  warm_start();
+  prepare_sweeps();
+  // Rounds: Gauss-Seidel sweeps against the rods' true velocities, with each node's own mass
+  // (which responds more than the stiffness-coupled rod does, so they find too little impulse),
+  // then the rods' true response to that change of the impulses, scaled by the factor that best
+  // meets the normal constraints of the contacts carrying an impulse (a minimal-residual step:
+  // one round is exact for a single contact), and projected back into the Coulomb cones. The
+  // last response sets the rods' state.
   const ContactSettings& cs = world.contact;
-  auto point_velocity = [&](int rod, int seg, double s) {
-    return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
-  };
-  auto apply = [&](const Contact& c, const Vec3& p) {
-    velocity_[c.rod_a][c.seg_a] += ((1.0 - c.s_a) * inv_mass_[c.rod_a][c.seg_a]) * p;
-    velocity_[c.rod_a][c.seg_a + 1] += (c.s_a * inv_mass_[c.rod_a][c.seg_a + 1]) * p;
-    if (c.rod_b >= 0) {
-      velocity_[c.rod_b][c.seg_b] -= ((1.0 - c.s_b) * inv_mass_[c.rod_b][c.seg_b]) * p;
-      velocity_[c.rod_b][c.seg_b + 1] -= (c.s_b * inv_mass_[c.rod_b][c.seg_b + 1]) * p;
+  const size_t nc = contacts_.size();
+  // A rod whose step included predicted impulses is answered even without contacts now (the
+  // response then takes the prediction back out).
+  touched_.assign(nr, 0);
+  for (int r = 0; r < nr; ++r) touched_[r] = steppers[r].has_prediction() ? 1 : 0;
+  for (const Contact& c : contacts_) {
+    touched_[c.rod_a] = 1;
+    if (c.rod_b >= 0) touched_[c.rod_b] = 1;
+  }
+  impulse_.resize(nr);
+  change_v_.resize(nr);
+  auto gather = [&](auto&& impulse_of) {
+    for (int r = 0; r < nr; ++r)
+      if (touched_[r]) impulse_[r].assign(rods[r].num_nodes(), Vec3::Zero());
+    for (size_t k = 0; k < nc; ++k) {
+      const Contact& c = contacts_[k];
+      const Vec3 p = impulse_of(k);
+      impulse_[c.rod_a][c.seg_a] += (1.0 - c.s_a) * p;
+      impulse_[c.rod_a][c.seg_a + 1] += c.s_a * p;
+      if (c.rod_b >= 0) {
+        impulse_[c.rod_b][c.seg_b] -= (1.0 - c.s_b) * p;
+        impulse_[c.rod_b][c.seg_b + 1] -= c.s_b * p;
+      }
     }
   };
+  auto respond_all = [&] {
+    gather([&](size_t k) { return Vec3(contacts_[k].pn * contacts_[k].normal + contacts_[k].pt); });
+    for (int r = 0; r < nr; ++r) {
+      if (!touched_[r]) continue;
+      steppers[r].respond(rods[r], impulse_[r], h);
+      velocity_[r] = rods[r].velocities();
+    }
+  };
+  respond_all();
+  old_.resize(nc);
+  stats_.iterations = 0;
+  // How far the true velocities leave a contact closing past its target over the step, in units
+  // of the rod's radius.
+  auto violation = [&] {
+    double worst = 0.0;
+    for (const Contact& c : contacts_) {
+      Vec3 vr =
+          (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
+      vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
+                                c.s_b * velocity_[c.rod_b][c.seg_b + 1])
+                         : c.surface_velocity;
+      const double closing = normal_target(c, cs, h) - vr.dot(c.normal);
+      worst = std::max(worst, h * closing / rods[c.rod_a].section().radius);
+    }
+    return worst;
+  };
+  for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
+    if (round > 0 && violation() <= cs.implicit_tolerance) break;
+    for (size_t k = 0; k < nc; ++k) old_[k] = {0, contacts_[k].pn, contacts_[k].pt};
+    for (int r = 0; r < nr; ++r)
+      if (touched_[r]) held_v_[r] = velocity_[r];  // the true velocities
+    sweep(cs, h, cs.iterations);
+    double change = 0.0, largest = 0.0;
+    for (size_t k = 0; k < nc; ++k) {
+      const Contact& c = contacts_[k];
+      change =
+          std::max(change, (c.pn * c.normal + c.pt - old_[k].pn * c.normal - old_[k].pt).norm());
+      largest = std::max(largest, c.pn);
+    }
+    if (change <= 1e-6 * largest) {
+      for (int r = 0; r < nr; ++r)
+        if (touched_[r]) velocity_[r] = held_v_[r];
+      break;
+    }
+    gather([&](size_t k) {
+      const Contact& c = contacts_[k];
+      return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
+    });
+    for (int r = 0; r < nr; ++r)
+      if (touched_[r]) steppers[r].response(rods[r], impulse_[r], h, &change_v_[r]);
+    auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
+      return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
+    };
+    double num = 0.0, den = 0.0;
+    for (const Contact& c : contacts_) {
+      if (c.pn <= 0.0) continue;
+      Vec3 vr = point(held_v_, c.rod_a, c.seg_a, c.s_a),
+           dv = point(change_v_, c.rod_a, c.seg_a, c.s_a);
+      if (c.rod_b >= 0) {
+        vr -= point(held_v_, c.rod_b, c.seg_b, c.s_b);
+        dv -= point(change_v_, c.rod_b, c.seg_b, c.s_b);
+      } else {
+        vr -= c.surface_velocity;
+      }
+      const double res = vr.dot(c.normal) - normal_target(c, cs, h), dres = dv.dot(c.normal);
+      num += res * dres;
+      den += dres * dres;
+    }
+    const double alpha = den > 0.0 ? std::clamp(-num / den, 1.0, cs.max_round_scale) : 1.0;
+    for (size_t k = 0; k < nc; ++k) {
+      Contact& c = contacts_[k];
+      c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn));
+      Vec3 pt = old_[k].pt + alpha * (c.pt - old_[k].pt);
+      pt -= c.normal * c.normal.dot(pt);
+      const double limit = c.mu * c.pn, norm = pt.norm();
+      if (norm > limit) pt *= limit / norm;
+      c.pt = pt;
+    }
+    respond_all();
+  }
+  // Remembered per rod, as the next step's prediction.
+  last_impulse_.resize(nr);
+  for (int r = 0; r < nr; ++r) {
+    if (touched_[r])
+      last_impulse_[r] = impulse_[r];
+    else
+      last_impulse_[r].clear();
+  }
+  finish(world, h, false);
+}
+
+double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {
+  // d + h v_n >= 0 for a gap; a penetration is pushed out at a capped speed.
+  return c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
+}
+
+void ContactSystem::prepare_sweeps() {
   std::vector<double>& wsum = scratch_w_;
   wsum.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
@@ -100,12 +251,27 @@ void ContactSystem::solve(World& world, double h) {
       w += (1 - c.s_b) * (1 - c.s_b) * wb[c.seg_b] + c.s_b * c.s_b * wb[c.seg_b + 1];
     }
     wsum[k] = w;
-    if (w > 0.0) apply(c, c.pn * c.normal + c.pt);
+    if (w > 0.0) apply_impulse(c, c.pn * c.normal + c.pt);
   }
+}
+
+void ContactSystem::apply_impulse(const Contact& c, const Vec3& p) {
+  velocity_[c.rod_a][c.seg_a] += ((1.0 - c.s_a) * inv_mass_[c.rod_a][c.seg_a]) * p;
+  velocity_[c.rod_a][c.seg_a + 1] += (c.s_a * inv_mass_[c.rod_a][c.seg_a + 1]) * p;
+  if (c.rod_b >= 0) {
+    velocity_[c.rod_b][c.seg_b] -= ((1.0 - c.s_b) * inv_mass_[c.rod_b][c.seg_b]) * p;
+    velocity_[c.rod_b][c.seg_b + 1] -= (c.s_b * inv_mass_[c.rod_b][c.seg_b + 1]) * p;
+  }
+}
+
+void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
+  auto point_velocity = [&](int rod, int seg, double s) {
+    return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
+  };
+  const std::vector<double>& wsum = scratch_w_;
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
   // warm started, settle in a few sweeps), or the iteration limit.
-  stats_.iterations = 0;
-  for (int it = 0; it < cs.iterations; ++it) {
+  for (int it = 0; it < iterations; ++it) {
     double change = 0.0, largest = 0.0;
     ++stats_.iterations;
     for (size_t k = 0; k < contacts_.size(); ++k) {
@@ -115,9 +281,7 @@ void ContactSystem::solve(World& world, double h) {
       // Relative to the other surface: a rod's, or a (moving) obstacle's.
       Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
       vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
-      // Normal: d + h v_n >= 0 for a gap; a penetration is pushed out at a capped speed.
-      const double target =
-          c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
+      const double target = normal_target(c, cs, h);
       const double vn = vr.dot(c.normal);
       const double pn = std::max(0.0, c.pn + (target - vn) / w);
       Vec3 dp = (pn - c.pn) * c.normal;
@@ -131,19 +295,25 @@ void ContactSystem::solve(World& world, double h) {
       if (norm > limit) pt *= limit / norm;
       dp += pt - c.pt;
       c.pt = pt;
-      apply(c, dp);
+      apply_impulse(c, dp);
       change = std::max(change, dp.norm());
       largest = std::max(largest, c.pn);
     }
     if (change <= 1e-6 * largest) break;
   }
-  // The impulses as forces of the step; remembered for the next step's warm start.
+}
+
+// The impulses as forces of the step (explicit: added to the rods' node forces); remembered for
+// the next step's warm start.
+void ContactSystem::finish(World& world, double h, bool add_forces) {
+  auto& rods = world.rods();
   previous_.clear();
   stats_.active = 0;
   for (const Contact& c : contacts_) {
     if (c.pn <= 0.0) continue;
     ++stats_.active;
     previous_.push_back({pair_key(c), c.pn, c.pt});
+    if (!add_forces) continue;
     const Vec3 f = (c.pn * c.normal + c.pt) / h;
     rods[c.rod_a].add_step_force(c.seg_a, (1.0 - c.s_a) * f);
     rods[c.rod_a].add_step_force(c.seg_a + 1, c.s_a * f);

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 
 namespace corde {
 
@@ -34,76 +33,264 @@ Vec3 inv_right_jacobian_t(const Vec3& theta, const Vec3& y) {
   return y - 0.5 * theta.cross(y) + c * theta.cross(theta.cross(y));
 }
 
+// Restricts unknown u (3 components at 3u) of a to the directions of the projector p: rows and
+// columns multiplied by p, the complement (I - p) on the diagonal, so that the solution's
+// component lies in p's range and the matrix stays positive definite.
+void project_block(BlockTridiag* a, int u, const Mat3& p) {
+  const int k = u / 2, o = 3 * (u % 2);
+  Mat6 pf = Mat6::Identity();
+  pf.block<3, 3>(o, o) = p;
+  a->diag[k] = pf * a->diag[k] * pf;
+  a->diag[k].block<3, 3>(o, o) += Mat3::Identity() - p;
+  if (k < static_cast<int>(a->lower.size())) a->lower[k] = a->lower[k] * pf;
+  if (k > 0) a->lower[k - 1] = pf * a->lower[k - 1];
+}
+
 }  // namespace
 
+void ImplicitEuler::setup_supports(Rod& rod, double t1) {
+  const int nn = rod.num_nodes();
+  auto& x = rod.positions();
+  auto& q = rod.orientations();
+  kind_.assign(2 * nn, 0);
+  proj_.resize(2 * nn);
+  kind_[2 * nn - 1] = 1;  // the unused rotation slot of the last block
+  for (const NodeConstraint& c : rod.node_constraints()) {
+    const Vec3& a = c.direction;
+    const Mat3 aa = a * a.transpose();
+    const bool line = c.kind == NodeConstraint::Kind::kLine;
+    kind_[2 * c.node] = 2;
+    proj_[2 * c.node] = line ? aa : Mat3(Mat3::Identity() - aa);
+    Vec3& p = x[c.node];
+    p = line ? Vec3(c.point + a * a.dot(p - c.point)) : Vec3(p - a * a.dot(p - c.point));
+  }
+  for (const SegmentConstraint& c : rod.segment_constraints()) {
+    // Rotation about the world axis only: in the body frame of the step's start (which turning
+    // about that axis does not change).
+    const Vec3 b = q0_[c.segment].conjugate() * c.axis;
+    kind_[2 * c.segment + 1] = 2;
+    proj_[2 * c.segment + 1] = b * b.transpose();
+    const Vec3 th = b * b.dot(what_[c.segment]);
+    q[c.segment] = (q0_[c.segment] * exp_body(th)).normalized();
+  }
+  for (const NodeDrive& d : rod.node_drives()) {
+    x[d.node] = d.kind == NodeDrive::Kind::kTarget ? d.target : drive_position(d, t1);
+    kind_[2 * d.node] = 1;
+  }
+  for (const SegmentDrive& d : rod.segment_drives()) {
+    Quat target =
+        d.kind == SegmentDrive::Kind::kTarget ? d.target.normalized() : drive_orientation(d, t1);
+    if (target.coeffs().dot(q0_[d.segment].coeffs()) < 0.0) target.coeffs() *= -1.0;
+    q[d.segment] = target;
+    kind_[2 * d.segment + 1] = 1;
+  }
+}
+
+void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
+  (void)h;
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const Section& sec = rod.section();
+  friction_t_ = sec.gamma_t > 0.0;
+  friction_r_ = sec.gamma_r > 0.0 && ns > 1;
+  drag_on_ = rod.drag().active();
+  if (friction_t_ || drag_on_) {
+    tangent_.resize(ns);
+    chord0_.resize(ns);
+    for (int s = 0; s < ns; ++s) {
+      const Vec3 d = x0_[s + 1] - x0_[s];
+      const double len = d.norm();
+      tangent_[s] = len > 0.0 ? Vec3(d / len) : Vec3::Zero();
+      chord0_[s] = len;
+    }
+  }
+  if (friction_r_) {
+    rot0_.resize(ns);
+    for (int s = 0; s < ns; ++s) rot0_[s] = q0_[s].toRotationMatrix();
+  }
+  if (drag_on_) {
+    // As Rod::drag_block: per node the chord across it, the length it stands for (its mass over
+    // the mass per length), coefficients at the start velocity.
+    const Drag& dr = rod.drag();
+    const double inv_mu = 1.0 / sec.mass_per_length;
+    drag_.resize(nn);
+    for (int i = 0; i < nn; ++i) {
+      const Vec3 chord = x0_[std::min(i + 1, ns)] - x0_[std::max(i - 1, 0)];
+      const double len = chord.norm();
+      const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
+      const Vec3& v = v0_[i];
+      const Vec3 vt = v.dot(t) * t, vn = v - vt;
+      const double cn = dr.linear_normal + dr.quadratic_normal * vn.norm();
+      const double ct = dr.linear_tangential + dr.quadratic_tangential * vt.norm();
+      const Mat3 tt = t * t.transpose();
+      drag_[i] = (rod.node_masses()[i] * inv_mu) * (cn * (Mat3::Identity() - tt) + ct * tt);
+    }
+  }
+}
+
+void ImplicitEuler::setup_loads(const Rod& rod, double t1) {
+  const int ns = rod.num_segments();
+  forces_.clear();
+  torques_.clear();
+  for (const Load& l : rod.loads()) {
+    const double f = l.scale(t1);
+    if (f == 0.0) continue;
+    Vec3 value = f * l.value;
+    if (l.follower)
+      value = q0_[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] * value;
+    (l.kind == Load::Kind::kForce ? forces_ : torques_).push_back({l.index, value});
+  }
+  if (rod.has_external()) {
+    for (int i = 0; i < rod.num_nodes(); ++i)
+      if (!rod.external_forces()[i].isZero()) forces_.push_back({i, rod.external_forces()[i]});
+    for (int s = 0; s < ns; ++s)
+      if (!rod.external_torques()[s].isZero()) torques_.push_back({s, rod.external_torques()[s]});
+  }
+}
+
 double ImplicitEuler::merit(const Rod& rod, const RodSystem& sys, double h) const {
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const auto& x = rod.positions();
   double phi = sys.energy();
-  const double inv_h2 = 1.0 / (h * h);
-  for (int i = 0; i < rod.num_nodes(); ++i)
-    phi += 0.5 * inv_h2 * rod.node_masses()[i] * (rod.positions()[i] - xhat_[i]).squaredNorm();
-  for (int s = 0; s < rod.num_segments(); ++s) {
-    const Vec3 e = log_body(q0_[s].conjugate() * rod.orientations()[s]) - what_[s];
+  const double inv_h2 = 1.0 / (h * h), inv_h = 1.0 / h;
+  for (int i = 0; i < nn; ++i)
+    phi += 0.5 * inv_h2 * rod.node_masses()[i] * (x[i] - xhat_[i]).squaredNorm();
+  for (int s = 0; s < ns; ++s) {
+    const Vec3 e = theta_[s] - what_[s];
     phi += 0.5 * inv_h2 * e.dot(rod.segment_inertia(s).cwiseProduct(e));
   }
-  if (rod.has_external())
-    for (int i = 0; i < rod.num_nodes(); ++i)
-      phi -= rod.external_forces()[i].dot(rod.positions()[i]);
-  // Dead torques have no potential; their work over the step, taken along the rotation from the
-  // step's start (as statics does), keeps Phi consistent with the gradient.
-  if (sys.terms & kLoadTerm)
-    for (const Load& l : rod.loads())
-      if (!l.follower && l.kind == Load::Kind::kTorque)
-        phi -= sys.load_scale * l.scale(sys.t) *
-               l.value.dot(q0_[l.index] *
-                           log_body(q0_[l.index].conjugate() * rod.orientations()[l.index]));
+  if (friction_t_) {
+    const double gt = rod.section().gamma_t;
+    for (int s = 0; s < ns; ++s) {
+      const double u = tangent_[s].dot(x[s + 1] - x[s]) - chord0_[s];
+      phi += 0.5 * inv_h * gt / rod.rest_lengths()[s] * u * u;
+    }
+  }
+  if (friction_r_) {
+    const double gr = rod.section().gamma_r;
+    const auto& rest = rod.rest_lengths();
+    for (int j = 0; j + 1 < ns; ++j) {
+      const Vec3 dw = rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j];
+      phi += 0.5 * inv_h * gr / (0.5 * (rest[j] + rest[j + 1])) * dw.squaredNorm();
+    }
+  }
+  if (drag_on_)
+    for (int i = 0; i < nn; ++i) {
+      const Vec3 dx = x[i] - x0_[i];
+      phi += 0.5 * inv_h * dx.dot(drag_[i] * dx);
+    }
+  for (const auto& [i, f] : forces_) phi -= f.dot(x[i]);
+  // Torques have no potential on the rotations; their work along the step's rotation (as
+  // statics takes it) keeps Phi consistent with the gradient.
+  for (const auto& [s, tq] : torques_) phi -= tq.dot(q0_[s] * theta_[s]);
   return phi;
 }
 
 void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eigen::VectorXd* g) {
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const auto& x = rod.positions();
+  const auto& q = rod.orientations();
+  for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
   sys.gradient(g);
-  const double inv_h2 = 1.0 / (h * h);
-  for (int i = 0; i < rod.num_nodes(); ++i)
-    g->segment<3>(RodSystem::node_index(i)) +=
-        inv_h2 * rod.node_masses()[i] * (rod.positions()[i] - xhat_[i]);
-  for (int s = 0; s < rod.num_segments(); ++s) {
-    const Vec3 theta = log_body(q0_[s].conjugate() * rod.orientations()[s]);
-    const Vec3 e = theta - what_[s];
-    g->segment<3>(RodSystem::segment_index(s)) +=
-        inv_right_jacobian_t(theta, inv_h2 * rod.segment_inertia(s).cwiseProduct(e));
-  }
-  // Dead torques: the gradient of merit()'s work term (their work along the step's rotation),
-  // which differs from minus the body torque R^T T at first order in theta; it keeps the line
-  // search consistent.
-  if (sys.terms & kLoadTerm)
-    for (const Load& l : rod.loads()) {
-      if (l.follower || l.kind != Load::Kind::kTorque) continue;
-      const double f = sys.load_scale * l.scale(sys.t);
-      const int s = l.index;
-      const Vec3 theta = log_body(q0_[s].conjugate() * rod.orientations()[s]);
-      g->segment<3>(RodSystem::segment_index(s)) +=
-          f * (rod.orientations()[s].conjugate() * l.value -
-               inv_right_jacobian_t(theta, q0_[s].conjugate() * l.value));
+  const double inv_h2 = 1.0 / (h * h), inv_h = 1.0 / h;
+  for (int i = 0; i < nn; ++i)
+    g->segment<3>(RodSystem::node_index(i)) += inv_h2 * rod.node_masses()[i] * (x[i] - xhat_[i]);
+  if (friction_t_) {
+    const double gt = rod.section().gamma_t;
+    for (int s = 0; s < ns; ++s) {
+      const double u = tangent_[s].dot(x[s + 1] - x[s]) - chord0_[s];
+      const Vec3 f = (inv_h * gt / rod.rest_lengths()[s] * u) * tangent_[s];
+      g->segment<3>(RodSystem::node_index(s + 1)) += f;
+      g->segment<3>(RodSystem::node_index(s)) -= f;
     }
-  // External forces and torques (grasps, inputs) as dead loads over the step.
-  if (rod.has_external()) {
-    for (int i = 0; i < rod.num_nodes(); ++i)
-      g->segment<3>(RodSystem::node_index(i)) -= rod.external_forces()[i];
-    for (int s = 0; s < rod.num_segments(); ++s)
-      g->segment<3>(RodSystem::segment_index(s)) -=
-          rod.orientations()[s].conjugate() * rod.external_torques()[s];
   }
-  for (int j = 0; j < g->size(); ++j)
-    if (fixed_[j]) (*g)(j) = 0.0;
+  if (drag_on_)
+    for (int i = 0; i < nn; ++i)
+      g->segment<3>(RodSystem::node_index(i)) += inv_h * (drag_[i] * (x[i] - x0_[i]));
+  for (const auto& [i, f] : forces_) g->segment<3>(RodSystem::node_index(i)) -= f;
+  // Per segment, the gradient with respect to its total rotation theta, then mapped to the
+  // increment at the current iterate.
+  gth_.resize(ns);
+  for (int s = 0; s < ns; ++s)
+    gth_[s] = inv_h2 * rod.segment_inertia(s).cwiseProduct(theta_[s] - what_[s]);
+  if (friction_r_) {
+    const double gr = rod.section().gamma_r;
+    const auto& rest = rod.rest_lengths();
+    for (int j = 0; j + 1 < ns; ++j) {
+      const Vec3 dw = (inv_h * gr / (0.5 * (rest[j] + rest[j + 1]))) *
+                      (rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j]);
+      gth_[j + 1] += rot0_[j + 1].transpose() * dw;
+      gth_[j] -= rot0_[j].transpose() * dw;
+    }
+  }
+  for (const auto& [s, tq] : torques_) gth_[s] -= q0_[s].conjugate() * tq;
+  for (int s = 0; s < ns; ++s)
+    g->segment<3>(RodSystem::segment_index(s)) += inv_right_jacobian_t(theta_[s], gth_[s]);
 }
 
-ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity) {
-  if (!rod.node_constraints().empty() || !rod.segment_constraints().empty())
-    throw std::invalid_argument("implicit step: rod '" + rod.name() +
-                                "' has line, plane or axis constraints, which it does not handle");
-  for (const Load& l : rod.loads())
-    if (l.follower)
-      throw std::invalid_argument("implicit step: rod '" + rod.name() +
-                                  "' has a follower load, which it does not handle");
+void ImplicitEuler::project_gradient(Eigen::VectorXd* g) const {
+  for (int u = 0; u < static_cast<int>(kind_.size()); ++u) {
+    if (kind_[u] == 1) g->segment<3>(3 * u).setZero();
+    if (kind_[u] == 2) g->segment<3>(3 * u) = proj_[u] * g->segment<3>(3 * u);
+  }
+}
+
+void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const double inv_h2 = 1.0 / (h * h), inv_h = 1.0 / h;
+  sys.hessian(&a_);
+  for (int i = 0; i < nn; ++i)
+    a_.diag[i].topLeftCorner<3, 3>().diagonal().array() += inv_h2 * rod.node_masses()[i];
+  for (int s = 0; s < ns; ++s)
+    a_.diag[s].bottomRightCorner<3, 3>().diagonal() += inv_h2 * rod.segment_inertia(s);
+  if (friction_t_) {
+    const double gt = rod.section().gamma_t;
+    for (int s = 0; s < ns; ++s) {
+      const Mat3 m = (inv_h * gt / rod.rest_lengths()[s]) * (tangent_[s] * tangent_[s].transpose());
+      a_.add(RodSystem::node_index(s), RodSystem::node_index(s), m);
+      a_.add(RodSystem::node_index(s + 1), RodSystem::node_index(s + 1), m);
+      a_.add(RodSystem::node_index(s + 1), RodSystem::node_index(s), -m);
+    }
+  }
+  if (friction_r_) {
+    const double gr = rod.section().gamma_r;
+    const auto& rest = rod.rest_lengths();
+    for (int j = 0; j + 1 < ns; ++j) {
+      const double c = inv_h * gr / (0.5 * (rest[j] + rest[j + 1]));
+      const int a = RodSystem::segment_index(j), b = RodSystem::segment_index(j + 1);
+      a_.add(a, a, c * Mat3::Identity());
+      a_.add(b, b, c * Mat3::Identity());
+      a_.add(b, a, -c * (rot0_[j + 1].transpose() * rot0_[j]));
+    }
+  }
+  if (drag_on_)
+    for (int i = 0; i < nn; ++i)
+      a_.add(RodSystem::node_index(i), RodSystem::node_index(i), inv_h * drag_[i]);
+  for (int u = 0; u < static_cast<int>(kind_.size()); ++u) {
+    if (kind_[u] == 1)
+      for (int c = 0; c < 3; ++c) a_.fix(3 * u + c);
+    if (kind_[u] == 2) project_block(&a_, u, proj_[u]);
+  }
+}
+
+// The residual of a held or constrained item's equation is what its support supplies: for a
+// node m (x - x_hat)/h^2 - f, as Rod::apply_drives records it.
+void ImplicitEuler::record_reactions(Rod& rod) {
+  const auto& q = rod.orientations();
+  for (NodeDrive& d : rod.node_drives_) d.reaction = g_.segment<3>(RodSystem::node_index(d.node));
+  for (SegmentDrive& d : rod.segment_drives_)
+    d.reaction = q[d.segment] * Vec3(g_.segment<3>(RodSystem::segment_index(d.segment)));
+  for (NodeConstraint& c : rod.node_constraints_) {
+    const Vec3 r = g_.segment<3>(RodSystem::node_index(c.node));
+    c.reaction = r - proj_[2 * c.node] * r;
+  }
+  for (SegmentConstraint& c : rod.segment_constraints_) {
+    const Vec3 r = g_.segment<3>(RodSystem::segment_index(c.segment));
+    c.reaction = q[c.segment] * Vec3(r - proj_[2 * c.segment + 1] * r);
+  }
+}
+
+ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
+                                   const std::vector<Vec3>* predicted) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
   auto& x = rod.positions();
   auto& q = rod.orientations();
@@ -111,37 +298,39 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   auto& w = rod.angular_velocities();
   x0_ = x;
   q0_ = q;
+  v0_ = v;
   xhat_.resize(nn);
   what_.resize(ns);
+  theta_.resize(ns);
   for (int i = 0; i < nn; ++i) xhat_[i] = x[i] + h * v[i];
   for (int s = 0; s < ns; ++s) what_[s] = h * w[s];
+  factored_ = false;
 
-  // Kinematic items at their drives' state at t + h, fixed in the solve; the rest predicted.
+  // Predictor: free items move on with their velocities; supports are set or projected.
   const double t1 = t + h;
-  fixed_.assign(6 * nn, 0);
-  for (int c = 3; c < 6; ++c) fixed_[6 * ns + c] = 1;  // the unused slot
   for (int i = 0; i < nn; ++i) x[i] = xhat_[i];
   for (int s = 0; s < ns; ++s) q[s] = (q0_[s] * exp_body(what_[s])).normalized();
-  for (const NodeDrive& d : rod.node_drives()) {
-    x[d.node] = d.kind == NodeDrive::Kind::kTarget ? d.target : drive_position(d, t1);
-    for (int c = 0; c < 3; ++c) fixed_[RodSystem::node_index(d.node) + c] = 1;
-  }
-  for (const SegmentDrive& d : rod.segment_drives()) {
-    Quat target =
-        d.kind == SegmentDrive::Kind::kTarget ? d.target.normalized() : drive_orientation(d, t1);
-    if (target.coeffs().dot(q0_[d.segment].coeffs()) < 0.0) target.coeffs() *= -1.0;
-    q[d.segment] = target;
-    for (int c = 0; c < 3; ++c) fixed_[RodSystem::segment_index(d.segment) + c] = 1;
-  }
+  setup_supports(rod, t1);
   for (GhostFrame* gf : {&rod.ghost_start(), &rod.ghost_end()})
     if (gf->active && gf->motion) gf->frame = ghost_frame_at(*gf, t1);
+  setup_dissipation(rod, h);
+  setup_loads(rod, t1);
+  predicted_.clear();
+  if (predicted && static_cast<int>(predicted->size()) == nn) {
+    predicted_ = *predicted;
+    for (int i = 0; i < nn; ++i)
+      if (!predicted_[i].isZero()) forces_.push_back({i, predicted_[i] / h});
+  }
 
   RodSystem sys{&rod, gravity, t1};
   sys.definite = true;
+  sys.terms = kAllTerms & ~kLoadTerm;  // loads: setup_loads, held over the step
   double lc = 0.0, ref = 0.0;
   for (double l : rod.rest_lengths()) lc += l / ns;
-  for (int i = 0; i < nn; ++i) ref += rod.node_masses()[i] * (gravity.norm() + v[i].norm() / h);
+  for (int i = 0; i < nn; ++i) ref += rod.node_masses()[i] * (gravity.norm() + v0_[i].norm() / h);
   for (int s = 0; s < ns; ++s) ref += rod.segment_inertia(s).maxCoeff() * w[s].norm() / (h * lc);
+  for (const auto& f : forces_) ref += f.second.norm();
+  for (const auto& tq : torques_) ref += tq.second.norm() / lc;
   // Residual noise of the forces: strains carry round-off of eps (1 + |x| / l).
   double xmax = 0.0;
   for (const Vec3& p : x) xmax = std::max(xmax, p.cwiseAbs().maxCoeff());
@@ -151,7 +340,6 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
                        (sec.stretch + sec.kappa + (sec.bend + sec.twist) / (lc * lc));
   ImplicitResult res;
   res.reference = ref;
-  const double inv_h2 = 1.0 / (h * h);
   auto norm_scaled = [&](const Eigen::VectorXd& g) {
     double r2 = 0.0;
     for (int k = 0; k < nn; ++k) {
@@ -160,48 +348,50 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     }
     return std::sqrt(r2);
   };
-  gradient(rod, sys, h, &g_);
+  auto full_gradient = [&](Eigen::VectorXd* g) {
+    gradient(rod, sys, h, g);
+    project_gradient(g);
+  };
+  full_gradient(&g_);
   double phi = merit(rod, sys, h);
   // Magnitude of the terms Phi sums, for telling its changes from round-off.
   const double phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
+  std::vector<Vec3> xs;
   for (int it = 0; it < opt_.max_iterations; ++it) {
     res.residual = norm_scaled(g_);
     if (res.residual <= std::max(opt_.tolerance * ref, floor)) {
       res.converged = true;
       break;
     }
-    sys.hessian(&a_);
-    for (int i = 0; i < nn; ++i)
-      a_.diag[i].topLeftCorner<3, 3>().diagonal().array() += inv_h2 * rod.node_masses()[i];
-    for (int s = 0; s < ns; ++s)
-      a_.diag[s].bottomRightCorner<3, 3>().diagonal() += inv_h2 * rod.segment_inertia(s);
-    for (int j = 0; j < 6 * nn; ++j)
-      if (fixed_[j]) a_.fix(j);
+    assemble(rod, sys, h);
     ++res.iterations;
-    if (!solver_.factor(a_)) break;  // cannot happen with the definite variant and masses > 0
+    factored_ = solver_.factor(a_);
+    if (!factored_) break;  // cannot happen with the definite variant and masses > 0
     d_ = -g_;
     solver_.solve(&d_);
     // Backtracking line search (Armijo) on Phi along the retraction.
     const double slope = g_.dot(d_);
-    xk_ = x;
+    xs = x;
     qk_ = q;
     double alpha = 1.0, phi_new = phi;
     bool accepted = false;
     for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
-      for (int i = 0; i < nn; ++i) x[i] = xk_[i] + alpha * d_.segment<3>(6 * i);
-      for (int s = 0; s < ns; ++s)
+      for (int i = 0; i < nn; ++i) x[i] = xs[i] + alpha * d_.segment<3>(6 * i);
+      for (int s = 0; s < ns; ++s) {
         q[s] = (qk_[s] * exp_body(alpha * d_.segment<3>(6 * s + 3))).normalized();
+        theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+      }
       phi_new = merit(rod, sys, h);
       if (!std::isfinite(phi_new)) continue;
       if (phi_new <= phi + 1e-4 * alpha * slope) {
         accepted = true;
-        gradient(rod, sys, h, &g_);
+        full_gradient(&g_);
         break;
       }
       // Near the solution the change of Phi is lost in its round-off: accept a step that lowers
       // the residual instead.
       if (std::abs(phi_new - phi) <= 1e3 * std::numeric_limits<double>::epsilon() * phi_scale) {
-        gradient(rod, sys, h, &g_trial_);
+        full_gradient(&g_trial_);
         if (norm_scaled(g_trial_) < res.residual) {
           g_.swap(g_trial_);
           accepted = true;
@@ -210,9 +400,9 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       }
     }
     if (!accepted) {
-      x = xk_;
+      x = xs;
       q = qk_;
-      gradient(rod, sys, h, &g_);
+      full_gradient(&g_);
       break;
     }
     phi = phi_new;
@@ -221,8 +411,13 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     res.residual = norm_scaled(g_);
     res.converged = res.residual <= std::max(opt_.tolerance * ref, floor);
   }
+  // Reactions from the unprojected residual.
+  gradient(rod, sys, h, &g_trial_);
+  g_trial_.swap(g_);
+  record_reactions(rod);
+  g_trial_.swap(g_);
   for (int i = 0; i < nn; ++i) v[i] = (x[i] - x0_[i]) / h;
-  for (int s = 0; s < ns; ++s) w[s] = log_body(q0_[s].conjugate() * q[s]) / h;
+  for (int s = 0; s < ns; ++s) w[s] = theta_[s] / h;
   // Drives give their own velocities (as Rod::step's drives do).
   for (const NodeDrive& d : rod.node_drives())
     if (d.kind != NodeDrive::Kind::kTarget) drive_position(d, t1, &v[d.node]);
@@ -232,7 +427,66 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       drive_orientation(d, t1, &ww);
       w[d.segment] = q[d.segment].conjugate() * ww;
     }
+  x_free_ = x;
+  q_free_ = q;
+  v_free_ = v;
+  w_free_ = w;
   return res;
+}
+
+bool ImplicitEuler::ensure_factor(const Rod& rod, double h) {
+  if (factored_) return true;
+  // Converged without a Newton iteration: factor at the result.
+  RodSystem sys{&rod, Vec3::Zero(), 0.0};
+  sys.definite = true;
+  sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;
+  assemble(rod, sys, h);
+  factored_ = solver_.factor(a_);
+  return factored_;
+}
+
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) {
+  const int nn = static_cast<int>(kind_.size() / 2);
+  z_.setZero(6 * nn);
+  for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
+  if (!predicted_.empty())
+    for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
+  project_gradient(&z_);
+  solver_.solve(&z_);
+  project_gradient(&z_);
+}
+
+void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses, double h,
+                             std::vector<Vec3>* dv) {
+  const int nn = rod.num_nodes();
+  dv->assign(nn, Vec3::Zero());
+  if (!ensure_factor(rod, h)) return;
+  solve_impulses(impulses, h);
+  for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
+}
+
+void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double h) {
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  auto& x = rod.positions();
+  auto& q = rod.orientations();
+  auto& v = rod.velocities();
+  auto& w = rod.angular_velocities();
+  x = x_free_;
+  q = q_free_;
+  v = v_free_;
+  w = w_free_;
+  if (!ensure_factor(rod, h)) return;
+  solve_impulses(impulses, h);
+  for (int i = 0; i < nn; ++i) {
+    if (kind_[2 * i] == 1) continue;
+    x[i] += z_.segment<3>(6 * i);
+    v[i] = (x[i] - x0_[i]) / h;
+  }
+  for (int s = 0; s < ns; ++s) {
+    if (kind_[2 * s + 1] == 1) continue;
+    q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
+    w[s] = log_body(q0_[s].conjugate() * q[s]) / h;
+  }
 }
 
 }  // namespace corde

@@ -486,10 +486,8 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
   scene.world.integrator = kDefaultIntegrator;
   if (auto v = top.find("integrator"))
-    scene.world.integrator =
-        v->choice({"semi_implicit_euler", "split_rotation"}) == "semi_implicit_euler"
-            ? Integrator::kSemiImplicitEuler
-            : Integrator::kSplitRotation;
+    parse_integrator(v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler"}),
+                     &scene.world.integrator);
   if (auto v = top.find("duration")) scene.duration = v->positive();
   std::optional<Value> step = top.find("time_step");
   bool step_given = false;

@@ -1,5 +1,6 @@
 #include "corde_sim/world.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace corde {
@@ -23,7 +24,9 @@ const Rod& World::rod(const std::string& name) const { return const_cast<World*>
 void World::step() {
   if (obstacles && !obstacle_motions.empty())
     move_obstacles(obstacle_motions, time_, time_step, obstacles.get());
-  if (!ContactSystem::needed(*this)) {
+  if (integrator == Integrator::kImplicitEuler) {
+    step_implicit();
+  } else if (!ContactSystem::needed(*this)) {
     for (Rod& r : rods_) r.step(time_, time_step, gravity, integrator);
   } else {
     for (Rod& r : rods_) r.compute_forces(time_, gravity);
@@ -33,6 +36,28 @@ void World::step() {
     for (Rod& r : rods_) r.integrate(time_, time_step, integrator);
   }
   time_ += time_step;
+}
+
+void World::step_implicit() {
+  implicit_.resize(rods_.size());
+  implicit_stats_ = ImplicitStats();
+  const bool contacts = ContactSystem::needed(*this);
+  for (size_t r = 0; r < rods_.size(); ++r) {
+    implicit_[r].set_options(implicit);
+    // Contacts' impulses of the last step as the prediction (they change little between steps).
+    const std::vector<Vec3>* predicted =
+        contacts && contacts_ ? contacts_->last_impulses(static_cast<int>(r)) : nullptr;
+    const ImplicitResult res = implicit_[r].step(rods_[r], time_, time_step, gravity, predicted);
+    implicit_stats_.iterations = std::max(implicit_stats_.iterations, res.iterations);
+    if (!res.converged) ++implicit_stats_.unconverged;
+    if (res.reference > 0.0)
+      implicit_stats_.worst_residual =
+          std::max(implicit_stats_.worst_residual, res.residual / res.reference);
+  }
+  if (contacts) {
+    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
+    contacts_->solve_implicit(*this, time_step, implicit_);
+  }
 }
 
 bool World::finite() const {

@@ -32,8 +32,9 @@
 // once, as statics used it): the step matrix of an implicit step at h = 2 ms.
 // BM_Statics/N/fd: solve_statics of a steel cantilever sagging under its weight, analytic
 // Hessian (fd = 0) against the former finite-difference Hessian (fd = 1).
-// BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned at
-// one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
+// BM_RopeOnFloorSelfContactImplicit/h_us: the coiled rope with the implicit integrator at that
+// step. BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned
+// at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
@@ -325,6 +326,22 @@ void BM_RopeOnFloorSelfContact(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RopeOnFloorSelfContact)->Unit(benchmark::kMicrosecond);
+
+// The same rope with the implicit integrator at a step of h_us microseconds (argument).
+void BM_RopeOnFloorSelfContactImplicit(benchmark::State& state) {
+  corde::Scene scene = rope_on_floor(100, true);
+  scene.world.integrator = corde::Integrator::kImplicitEuler;
+  scene.world.time_step = state.range(0) * 1e-6;
+  scene.world.step(200);  // settle the warm start at this step
+  run_world(state, scene.world, 100);
+  state.counters["newton"] = scene.world.implicit_stats().iterations;
+}
+
+BENCHMARK(BM_RopeOnFloorSelfContactImplicit)
+    ->Arg(500)
+    ->Arg(1000)
+    ->Arg(2000)
+    ->Unit(benchmark::kMicrosecond);
 
 // Cost against n: the coiled rope of n elements of 1 cm on the floor; second argument 1 = self
 // contact on, 0 = floor only.
