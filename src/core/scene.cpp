@@ -567,8 +567,9 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   ": started from its static equilibrium (residual %.3g N, %d Newton iterations, "
-                  "%d load steps)",
-                  e.result.residual, e.result.iterations, e.result.load_steps);
+                  "%d load step%s)",
+                  e.result.residual, e.result.iterations, e.result.load_steps,
+                  e.result.load_steps == 1 ? "" : "s");
     scene.settled.push_back("rod '" + rod.name() + "'" + buf);
     if (e.negative_modes > 0)
       scene.warnings.push_back(entries[i].equilibrium->path() + ": the equilibrium of rod '" +
