@@ -38,6 +38,15 @@ struct Scene {
   std::string name, description, source;
   // Problems that do not stop a run, e.g. a time step above the estimated stability limit.
   std::vector<std::string> warnings;
+  // What corde_run does with the scene (top-level `mode`): run it, or solve its static
+  // equilibrium with the drives and grasps at `statics_time` (scene_statics.h). The ROS node
+  // always runs it.
+  enum class Mode { kDynamics, kStatics };
+  Mode mode = Mode::kDynamics;
+  double statics_time = 0.0;  // s
+  // Rods started from their static equilibrium (`initial_state: equilibrium`), one line each:
+  // residual, Newton iterations, load steps.
+  std::vector<std::string> settled;
 };
 
 // Parses and validates a scene. `overrides` are "key.path=value" strings (e.g.

@@ -5,10 +5,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <sstream>
 
+#include "corde_sim/scene_statics.h"
 #include "corde_sim/stability.h"
 #include "scene_reader.h"
 
@@ -280,10 +282,18 @@ Drag read_drag(const Value& v, double radius) {
 struct RodEntry {
   std::string path;
   Owners owners;
+  // `initial_state: equilibrium` (the rod's own key, or the scene's default): the key to name in
+  // errors.
+  std::optional<Value> equilibrium;
 };
 
+// `initial_state`: given (the shape and velocities as described) or equilibrium.
+bool wants_equilibrium(const Value& v) {
+  return v.choice({"given", "equilibrium"}) == "equilibrium";
+}
+
 void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* entries,
-              const std::string& base) {
+              const std::string& base, const std::optional<Value>& default_state) {
   Map m(v);
   RodSpec spec;
   spec.name = "rod" + std::to_string(index);
@@ -316,8 +326,17 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
   }
   if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
   if (auto c = m.find("contact")) scene_detail::read_rod_contact(*c, &rod->contact_options());
-  if (auto i = m.find("initial")) scene_detail::read_initial(*i, rod);
-  RodEntry entry{v.path(), {}};
+  std::optional<Value> state = m.find("initial_state");
+  if (!state) state = default_state;
+  const bool settle = state && wants_equilibrium(*state);
+  if (auto i = m.find("initial")) {
+    if (settle)
+      state->fail("equilibrium starts " + v.path() +
+                  " at rest in its equilibrium shape; remove its `initial` key (velocities, "
+                  "perturbation) or set initial_state: given on the rod");
+    scene_detail::read_initial(*i, rod);
+  }
+  RodEntry entry{v.path(), {}, settle ? state : std::nullopt};
   if (auto b = m.find("boundary"))
     for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries")) {
       Support support;
@@ -489,6 +508,10 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     parse_integrator(v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler"}),
                      &scene.world.integrator);
   if (auto v = top.find("duration")) scene.duration = v->positive();
+  if (auto v = top.find("mode"))
+    scene.mode = v->choice({"dynamics", "statics"}) == "statics" ? Scene::Mode::kStatics
+                                                                 : Scene::Mode::kDynamics;
+  if (auto v = top.find("statics_time")) scene.statics_time = v->non_negative();
   std::optional<Value> step = top.find("time_step");
   bool step_given = false;
   if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {
@@ -507,8 +530,10 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   const std::string base = source == "<string>" || slash == std::string::npos
                                ? std::string()
                                : (slash == 0 ? std::string("/") : source.substr(0, slash));
+  std::optional<Value> default_state = top.find("initial_state");
+  if (default_state) wants_equilibrium(*default_state);  // checks the value
   for (size_t i = 0; i < items.size(); ++i)
-    read_rod(items[i], static_cast<int>(i), &scene, &entries, base);
+    read_rod(items[i], static_cast<int>(i), &scene, &entries, base, default_state);
   if (auto c = top.find("contact")) scene_detail::read_contact_settings(*c, &scene.world.contact);
   if (auto o = top.find("obstacles")) scene_detail::read_obstacles(*o, &scene.world, base);
   if (auto g = top.find("grasps")) {
@@ -527,6 +552,28 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     }
   }
   top.finish();
+  // After the grasps (which hold the rod) and obstacles (which statics refuses) are known.
+  for (size_t i = 0; i < entries.size(); ++i) {
+    if (!entries[i].equilibrium) continue;
+    Rod& rod = scene.world.rods()[i];
+    RodEquilibrium e;
+    try {
+      e = settle_rod(&scene, &rod);
+    } catch (const SceneError& ex) {
+      entries[i].equilibrium->fail("equilibrium of " + entries[i].path + ": " + ex.what());
+    }
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  ": started from its static equilibrium (residual %.3g N, %d Newton iterations, "
+                  "%d load step%s)",
+                  e.result.residual, e.result.iterations, e.result.load_steps,
+                  e.result.load_steps == 1 ? "" : "s");
+    scene.settled.push_back("rod '" + rod.name() + "'" + buf);
+    if (e.negative_modes > 0)
+      scene.warnings.push_back(entries[i].equilibrium->path() + ": the equilibrium of rod '" +
+                               rod.name() + "' is unstable (" + std::to_string(e.negative_modes) +
+                               " negative Hessian eigenvalues): the run will leave it");
+  }
   check_time_step(&scene, step_given ? &*step : nullptr);
   return scene;
 }

@@ -75,6 +75,11 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
       return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
   }
   for (const std::string& w : scene.warnings) ROS_WARN("corde_sim: scene: %s", w.c_str());
+  for (const std::string& s : scene.settled) ROS_INFO("corde_sim: scene: %s", s.c_str());
+  if (scene.mode == corde::Scene::Mode::kStatics)
+    ROS_WARN(
+        "corde_sim: scene: mode: statics is for corde_run; the node runs the scene (use "
+        "initial_state: equilibrium to start it at rest in equilibrium)");
   grasps_.clear();
   // Topics of grasps the new scene has too stay subscribed (a reset does not make publishers
   // reconnect); the others end.

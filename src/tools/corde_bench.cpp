@@ -35,12 +35,19 @@
 // BM_RopeOnFloorSelfContactImplicit/h_us: the coiled rope with the implicit integrator at that
 // step. BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned
 // at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
+// BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned at
+// one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
+// BM_StaticsMode/scene and BM_DynamicRelaxation/scene: statics as a mode (solve_scene_statics)
+// against dynamic relaxation (viscous) run until the forces vanish to the same tolerance,
+// on the shipped V2 cantilever (scene 0) and on a 100-element cable hanging between two pins (scene
+// 1).
 #include <benchmark/benchmark.h>
 
 #include <Eigen/SparseCholesky>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -57,6 +64,7 @@
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/rod_system.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/scene_statics.h"
 #include "corde_sim/stability.h"
 #include "corde_sim/statics.h"
 #include "corde_sim/world.h"
@@ -697,6 +705,115 @@ void BM_GripperSweep(benchmark::State& state) {
 }
 
 BENCHMARK(BM_GripperSweep)->Unit(benchmark::kMillisecond);
+
+// Statics as a mode against dynamic relaxation. Scene 0: the shipped V2 cantilever (50 elements,
+// tip load alpha = 2, ramps completed as statics takes them). Scene 1: a soft cable of 100
+// elements, 1.17 m long, pinned at two points 1 m apart at the same height, created as a V
+// (sag 0.3 m) and left to settle into its catenary under gravity.
+const char* kHangingCable = R"(
+name: hanging_cable_100
+rods:
+  - name: cable
+    elements: 100
+    material: {preset: soft_cable}
+    shape: {type: polyline, points: [[0, 0, 1], [0.5, 0, 0.7], [1, 0, 1]]}
+    boundary:
+      - {node: start, fix: true}
+      - {node: end, fix: true}
+)";
+// The tolerance both are held to: the largest force on a free node (torque / l on a free
+// segment) at rest over the rod's weight and loads. Statics reaches far below (its default
+// tolerance 1e-10); above the cable's round-off floor (~1e-7 of its weight, at z = 1 m).
+constexpr double kRelaxTolerance = 1e-6;
+
+corde::Scene relaxation_scene(int which) {
+  corde::Scene scene = which == 0
+                           ? corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) +
+                                               "/config/scenes/v2_cantilever_large_load.yaml")
+                           : corde::parse_scene(kHangingCable);
+  for (Rod& rod : scene.world.rods())
+    for (corde::Load& l : rod.loads()) l.ramp_time = 0.0;
+  return scene;
+}
+
+// Largest free force (torque / l) at rest over the weight and loads.
+double rest_residual(const Rod& moving, const Vec3& g) {
+  Rod rod = moving;
+  for (Vec3& v : rod.velocities()) v.setZero();
+  for (Vec3& w : rod.angular_velocities()) w.setZero();
+  rod.compute_forces(0.0, g);
+  double worst = 0.0, scale = 0.0;
+  for (int i = 0; i < rod.num_nodes(); ++i) {
+    scale += rod.node_masses()[i] * g.norm();
+    if (!rod.node_drive(i)) worst = std::max(worst, rod.forces()[i].norm());
+  }
+  for (int s = 0; s < rod.num_segments(); ++s)
+    if (!rod.segment_drive(s))
+      worst = std::max(worst, rod.torques()[s].norm() / rod.rest_lengths()[s]);
+  for (const corde::Load& l : rod.loads()) scale += l.value.norm();
+  return worst / scale;
+}
+
+void BM_StaticsMode(benchmark::State& state) {
+  const corde::Scene scene = relaxation_scene(static_cast<int>(state.range(0)));
+  corde::SceneEquilibrium eq;
+  for (auto _ : state) {
+    corde::Scene s = scene;
+    eq = corde::solve_scene_statics(&s, 0.0);
+    benchmark::DoNotOptimize(s.world.rods()[0].positions().data());
+    state.PauseTiming();
+    state.counters["residual"] = rest_residual(s.world.rods()[0], s.world.gravity);
+    state.ResumeTiming();
+  }
+  state.counters["newton"] = eq.rods[0].result.iterations;
+  state.counters["load_steps"] = eq.rods[0].result.load_steps;
+  if (!eq.ok) state.SkipWithError(eq.problem.c_str());
+}
+
+// Dynamic relaxation until rest_residual <= kRelaxTolerance (checked every 100 steps): the
+// classic viscous form, every velocity and spin scaled by exp(-2 omega h) after each step (mass-
+// and inertia-proportional damping, which damps every mode at the rate omega, the slowest one
+// critically), omega an estimate of the slowest mode: 2 rad/s for the cantilever, 6 rad/s for
+// the cable's swing. (Kinetic damping, zeroing the velocities at each kinetic-energy peak, blew
+// up V2 at 0.8 of the stable step: the fast modes peak every few steps.) At the scene's time
+// step (V2: 1e-4 s; the cable: auto), up to 60 s simulated (or CORDE_BENCH_RELAX_SECONDS). One
+// run per iteration.
+void BM_DynamicRelaxation(benchmark::State& state) {
+  const int which = static_cast<int>(state.range(0));
+  const double omega = which == 0 ? 2.0 : 6.0;
+  long steps = 0;
+  double residual = 1.0, h = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    corde::Scene scene = relaxation_scene(which);
+    corde::World& world = scene.world;
+    Rod& rod = world.rods()[0];
+    const char* env = std::getenv("CORDE_BENCH_RELAX_SECONDS");
+    h = world.time_step;
+    const long cap = std::lround((env ? std::atof(env) : 60.0) / h);
+    const double keep = std::exp(-2.0 * omega * h);
+    state.ResumeTiming();
+    for (steps = 1; steps <= cap; ++steps) {
+      world.step();
+      for (Vec3& v : rod.velocities()) v *= keep;
+      for (Vec3& w : rod.angular_velocities()) w *= keep;
+      if (steps % 100 == 0 && !((residual = rest_residual(rod, world.gravity)) > kRelaxTolerance))
+        break;
+    }
+  }
+  state.counters["steps"] = static_cast<double>(steps);
+  state.counters["simulated_s"] = steps * h;
+  state.counters["residual"] = residual;
+  if (!(residual <= kRelaxTolerance)) {
+    const std::string msg = "did not relax in the time allowed (residual " +
+                            std::to_string(residual) + " after " + std::to_string(steps * h) +
+                            " s)";
+    state.SkipWithError(msg.c_str());
+  }
+}
+
+BENCHMARK(BM_StaticsMode)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DynamicRelaxation)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

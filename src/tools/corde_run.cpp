@@ -13,6 +13,7 @@
 
 #include "corde_sim/scene.h"
 #include "corde_sim/scene_runner.h"
+#include "corde_sim/scene_statics.h"
 
 namespace {
 
@@ -20,7 +21,8 @@ const char* kUsage =
     "usage: corde_run SCENE.yaml [--duration S] [--dt H] [--set key.path=value ...]\n"
     "                 [--out FILE.csv] [--reactions FILE.csv] [--energies FILE.csv]\n"
     "                 [--every K] [--max-speed V] [--max-strain E]\n"
-    "                 [--max-energy J] [--max-steps N] [--quiet]\n"
+    "                 [--max-energy J] [--max-steps N] [--statics [--at T]] [--dynamics]\n"
+    "                 [--quiet]\n"
     "  --duration S   simulated time (s), overrides the scene's duration\n"
     "  --dt H         time step (s), overrides the scene's time_step\n"
     "  --set K=V      override a scene key, e.g. --set rods.0.elements=100 (repeatable)\n"
@@ -35,11 +37,60 @@ const char* kUsage =
     "  --max-energy J stop when a rod's (kinetic + elastic energy) / mass exceeds J J/kg\n"
     "                 (default 1e5; 0: off)\n"
     "  --max-steps N  refuse runs of more than N steps (default 1e9)\n"
-    "  --quiet        print only errors\n";
+    "  --statics      solve the static equilibrium instead of running (scene key mode:\n"
+    "                 statics): per rod its residual, Newton iterations, load steps,\n"
+    "                 stability and sag, per support its reaction; --out, --reactions and\n"
+    "                 --energies write the equilibrium\n"
+    "  --at T         statics with the drives and grasps at time T s (scene key\n"
+    "                 statics_time; default 0)\n"
+    "  --dynamics     run the scene even if it says mode: statics\n"
+    "  --quiet        print only errors\n"
+    "exit status: 0 done; 1 bad scene, or one statics cannot handle; 2 bad arguments;\n"
+    "3 the run blew up; 4 statics found no equilibrium\n";
 
 int usage_error(const std::string& msg) {
   std::fprintf(stderr, "corde_run: %s\n%s", msg.c_str(), kUsage);
   return 2;
+}
+
+// --statics: solves the equilibrium, prints its report and writes the output files at it.
+int run_statics(corde::Scene* scene, const std::string& scene_path, bool quiet,
+                const std::string& out_path, const std::string& reactions_path,
+                const std::string& energies_path) {
+  corde::SceneEquilibrium eq;
+  try {
+    eq = corde::solve_scene_statics(scene, scene->statics_time);
+  } catch (const corde::SceneError& e) {
+    std::fprintf(stderr, "corde_run: %s: %s\n", scene_path.c_str(), e.what());
+    return 1;
+  }
+  if (!quiet) std::printf("%s", corde::statics_summary(*scene, eq).c_str());
+  // The last iterate of a failed solve is written too (to see where it stuck), but never a
+  // non-finite state.
+  const bool finite = scene->world.finite();
+  auto write = [&](const std::string& path, auto&& header, auto&& rows) {
+    if (path.empty()) return true;
+    std::ofstream out(path);
+    header(out);
+    if (finite) rows(out);
+    out.close();
+    if (!out) std::fprintf(stderr, "corde_run: cannot write '%s'\n", path.c_str());
+    return static_cast<bool>(out);
+  };
+  const corde::World& world = scene->world;
+  const bool written = write(out_path, corde::write_csv_header,
+                             [&](std::ostream& o) { corde::write_csv_rows(o, world); }) &&
+                       write(reactions_path, corde::write_reaction_header,
+                             [&](std::ostream& o) { corde::write_reaction_rows(o, *scene); }) &&
+                       write(energies_path, corde::write_energy_header,
+                             [&](std::ostream& o) { corde::write_energy_rows(o, world); });
+  if (!written) return 1;
+  if (!eq.ok) {
+    std::fprintf(stderr, "corde_run: %s: statics: %s%s\n", scene_path.c_str(), eq.problem.c_str(),
+                 out_path.empty() ? "" : "; --out holds the last iterate");
+    return 4;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -48,7 +99,8 @@ int main(int argc, char** argv) {
   std::string scene_path, out_path, reactions_path, energies_path;
   std::vector<std::string> overrides;
   int every = 0;
-  bool quiet = false;
+  bool quiet = false, at_given = false;
+  std::string forced_mode;
   corde::RunOptions options;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -63,6 +115,17 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a == "--quiet" || a == "-q") {
       quiet = true;
+    } else if (a == "--statics" || a == "--dynamics") {
+      overrides.push_back(a == "--statics" ? "mode=statics" : "mode=dynamics");
+      forced_mode = a;
+    } else if (a == "--at") {
+      if (!value(&v)) return usage_error(a + " needs a value");
+      char* end = nullptr;
+      const double x = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(x) || x < 0.0)
+        return usage_error("--at needs a non-negative time in s, got '" + v + "'");
+      overrides.push_back("statics_time=" + v);
+      at_given = true;
     } else if (a == "--max-speed" || a == "--max-strain" || a == "--max-energy" ||
                a == "--max-steps") {
       if (!value(&v)) return usage_error(a + " needs a value");
@@ -104,6 +167,8 @@ int main(int argc, char** argv) {
     }
   }
   if (scene_path.empty()) return usage_error("no scene file given");
+  if (at_given && forced_mode == "--dynamics")
+    return usage_error("--at is the time of a statics solve; it does not go with --dynamics");
 
   corde::Scene scene;
   try {
@@ -134,6 +199,12 @@ int main(int argc, char** argv) {
     }
     *slot = stream;
   }
+  if (scene.mode == corde::Scene::Mode::kStatics)
+    return run_statics(&scene, scene_path, quiet, out_path, reactions_path, energies_path);
+  if (at_given)
+    return usage_error("--at is the time of a statics solve; add --statics (or mode: statics)");
+  if (!quiet)
+    for (const std::string& s : scene.settled) std::printf("initial    %s\n", s.c_str());
   const bool terminal = !quiet && isatty(STDERR_FILENO);
   bool progress_shown = false;
   if (terminal) {

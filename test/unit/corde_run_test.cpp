@@ -1,6 +1,10 @@
-// The run loop behind corde_run: CSV output, held grasps, blow-up detection, summary.
+// The run loop behind corde_run: CSV output, held grasps, blow-up detection, summary; and the tool
+// itself in statics mode: its exit statuses and messages.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <cstdio>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -116,6 +120,98 @@ TEST(SceneRunner, ReportsProgress) {
   run_scene(&s, o);
   EXPECT_EQ(calls, 2000 / 256);
 }
+
+#ifdef CORDE_RUN_BINARY
+struct ToolRun {
+  int status = -1;
+  std::string output;  // stdout and stderr
+};
+
+// Writes `scene` to a file and runs corde_run on it with `args`.
+ToolRun corde_run(const std::string& scene, const std::string& args, const std::string& name) {
+  const std::string path = ::testing::TempDir() + "corde_run_" + name + ".yaml";
+  std::ofstream(path) << scene;
+  const std::string cmd = std::string(CORDE_RUN_BINARY) + " " + path + " " + args + " 2>&1";
+  ToolRun r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  char buf[512];
+  while (fgets(buf, sizeof buf, pipe)) r.output += buf;
+  const int status = pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// Statics mode: the report, the CSV at the equilibrium, exit status 0.
+TEST(CordeRunStatics, ReportsTheEquilibrium) {
+  const std::string out = ::testing::TempDir() + "corde_run_statics.csv";
+  const ToolRun r = corde_run(kScene, "--statics --out " + out, "statics_ok");
+  EXPECT_EQ(r.status, 0) << r.output;
+  for (const char* want :
+       {"equilibrium at t = 0 s", "cable: converged", "Newton iterations", "load step", "stable",
+        "sag", "support    cable/clamp start: force", "support    gripper: force"})
+    EXPECT_NE(r.output.find(want), std::string::npos) << want << " in\n" << r.output;
+  std::ifstream csv(out);
+  std::stringstream text;
+  text << csv.rdbuf();
+  const std::vector<std::string> l = lines(text.str());
+  ASSERT_EQ(l.size(), 1u + 4);
+  EXPECT_EQ(l[1].rfind("0,cable,0,0,0,1,", 0), 0u) << l[1];
+  // The scene key does what the flag does; --dynamics overrides it; --at sets the time.
+  const std::string statics = std::string(kScene) + "mode: statics\n";
+  EXPECT_NE(corde_run(statics, "", "mode_key").output.find("cable: converged"), std::string::npos);
+  EXPECT_NE(corde_run(statics, "--dynamics", "mode_dyn").output.find("us/step"), std::string::npos);
+  EXPECT_NE(corde_run(kScene, "--statics --at 0.5", "at").output.find("at t = 0.5 s"),
+            std::string::npos);
+}
+
+// What statics cannot do: exit 1 (the scene) or 4 (no equilibrium) and a message saying what.
+TEST(CordeRunStatics, RefusesWhatItCannotSolve) {
+  const std::string base = R"(
+gravity: [0, 0, -9.81]
+rods:
+  - name: cable
+    elements: 4
+    material: {preset: soft_cable}
+    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], length: 0.2}
+)";
+  struct Case {
+    const char* name;
+    std::string extra;
+    int status;
+    const char* message;
+  } cases[] = {
+      {"follower",
+       "    boundary: [{clamp: start}]\n    loads: [{node: end, force: [0, 0, -1], "
+       "kind: follower}]\n",
+       1, "rod 'cable': the force on node 4 is a follower load"},
+      {"obstacle",
+       "    boundary: [{clamp: start}]\nobstacles: [{type: plane, normal: [0, 0, 1]}]\n", 1,
+       "rod 'cable' touches the scene's obstacles"},
+      {"slide", "    boundary: [{clamp: start}, {node: end, line: [1, 0, 0]}]\n", 1,
+       "node 4 slides on a line"},
+      {"self", "    boundary: [{clamp: start}]\n    contact: {self: true}\n", 1,
+       "has self contact"},
+      {"free", "", 1, "rod 'cable' is held nowhere"},
+      // A dead torque about a pin turns the rod for ever: its energy has no minimum.
+      {"pinned",
+       "    boundary: [{node: start, fix: true}]\n    loads: [{segment: end, torque: "
+       "[0, 0, 0.01]}]\n",
+       4, "rod 'cable': no static equilibrium found at t = 0 s"},
+  };
+  for (const Case& c : cases) {
+    std::string scene = base + c.extra;
+    if (std::string(c.name) == "pinned") scene.replace(scene.find("-9.81"), 5, "0");
+    const ToolRun r = corde_run(scene, "--statics", c.name);
+    EXPECT_EQ(r.status, c.status) << c.name << ":\n" << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.name << ":\n" << r.output;
+    EXPECT_NE(r.output.find("statics"), std::string::npos) << c.name << ":\n" << r.output;
+  }
+  EXPECT_EQ(corde_run(kScene, "--at 1", "at_dyn").status, 2);
+  EXPECT_EQ(corde_run(kScene, "--statics --at -1", "at_neg").status, 2);
+  EXPECT_EQ(corde_run(kScene, "--dynamics --at 1", "at_both").status, 2);
+}
+#endif
 
 }  // namespace
 }  // namespace corde
