@@ -244,9 +244,15 @@ def targets(d):
                    f"ratio {cp / co:.3g}")
     try:
         sm = read(os.path.join(d, "stability_map.csv"))
-        ratios = [r["ratio"] for r in sm if r["method"] != "implicit_euler"]
-        out.append(f"explicit measured/predicted stable step: {min(ratios):.3f} .. "
-                   f"{max(ratios):.3f} (target 0.7 .. 1.05)")
+        for lo, hi in ((1e5, math.inf), (0, 1e5)):
+            ratios = [r["ratio"] for r in sm
+                      if r["method"] != "implicit_euler" and lo <= r["youngs"] < hi]
+            if ratios:
+                out.append(f"explicit measured/predicted stable step, E in [{lo:g}, {hi:g}): "
+                           f"{min(ratios):.3f} .. {max(ratios):.3f} (target 0.7 .. 1.05)")
+        capped = [r for r in sm if r["method"] == "implicit_euler"]
+        out.append(f"implicit: stable at the 20 ms cap in {sum(int(r['capped']) for r in capped)}"
+                   f" of {len(capped)} (E, N) cases")
     except FileNotFoundError:
         pass
     return out

@@ -45,7 +45,8 @@ struct StepResult {
   double cpu_seconds = 0.0;           // CPU of the stepping loop
   double simulated_seconds = 0.0;
   bool finite = true;
-  long newton_failures = 0;  // implicit steps whose Newton iteration did not converge
+  long newton_failures = 0;    // implicit steps whose Newton iteration did not converge
+  long newton_iterations = 0;  // over all steps (implicit only)
 };
 
 // The first `count` roots of cos(b) cosh(b) + 1 = 0, written cos(b) + 1/cosh(b) = 0 so that
@@ -212,6 +213,7 @@ inline StepResult run_step_case(const StepCase& c) {
   res.cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
   res.finite = rod.finite();
   res.newton_failures = stepper.newton_failures();
+  res.newton_iterations = stepper.newton_iterations();
   double sum = 0.0, sum_t = 0.0;
   for (size_t k = 0; k < tip.size(); ++k) {
     const double t = (k + 1) * every * res.h;

@@ -41,6 +41,7 @@ class Stepper {
     if (method_ == Method::kImplicitEuler) {
       const ImplicitResult r = implicit_.step(rod, t, h, gravity);
       iterations_ += r.iterations;
+      relative_residual_ = r.reference > 0.0 ? r.residual / r.reference : r.residual;
       if (!r.converged) ++failures_;
       return r.converged;
     }
@@ -52,11 +53,14 @@ class Stepper {
   Method method() const { return method_; }
   long newton_iterations() const { return iterations_; }
   long newton_failures() const { return failures_; }
+  // |grad Phi| / its reference scale after the last implicit step (0 for explicit methods).
+  double relative_residual() const { return relative_residual_; }
 
  private:
   Method method_;
   ImplicitEuler implicit_;
   long iterations_ = 0, failures_ = 0;
+  double relative_residual_ = 0.0;
 };
 
 // Process CPU time (s): less sensitive to other load on a shared machine than wall time.

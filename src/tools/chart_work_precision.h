@@ -104,6 +104,7 @@ inline WorkPoint v8_point(Method m, int n, double h, double periods) {
   p.cpu_per_frame_us = r.cpu_seconds / r.simulated_seconds * 2e-3 * 1e6;
   p.error = r.error_rms_timoshenko;
   p.failures = r.newton_failures;
+  p.newton_per_step = static_cast<double>(r.newton_iterations) / std::max(1L, r.steps);
   return p;
 }
 
