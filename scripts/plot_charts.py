@@ -234,14 +234,16 @@ def targets(d):
         imp = pts(scene, "implicit_euler")
         for c, e, n, h in pareto(exp):
             ci = cheapest(imp, e)
+            ratio = f"explicit/implicit = {c / ci:.3g}" if ci < math.inf else "implicit: none"
             out.append(f"{scene}: explicit N={n} h={h:.3g}: error {e:.3e} at {c:.1f} us; implicit "
-                       f"at <= that error: {ci:.1f} us -> explicit/implicit = {c / ci:.3g}")
+                       f"at <= that error: {ci:.1f} us -> {ratio}")
     ours = [p for m in METHODS for p in pts("sag", m)]
     peers = [(c, e) for v in PEERS_SAG.values() for (_, e, c) in v]
     for a in (1e-2, 3e-3, 1e-3, 3e-4, 1e-4):
         cp, co = cheapest(peers, a), cheapest(ours, a)
-        out.append(f"sag at error <= {a:g} L: best peer {cp:.1f} us, best corde_sim {co:.1f} us, "
-                   f"ratio {cp / co:.3g}")
+        if co < math.inf:
+            out.append(f"sag at error <= {a:g} L: best peer {cp:.1f} us, best corde_sim "
+                       f"{co:.1f} us, ratio {cp / co:.3g}")
     try:
         sm = read(os.path.join(d, "stability_map.csv"))
         for lo, hi in ((1e5, math.inf), (0, 1e5)):
