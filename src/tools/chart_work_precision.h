@@ -70,9 +70,9 @@ struct SagScene {
 };
 
 // Error: the tip's distance from the reference at the discrete equilibrium (solve_statics on the
-// same rod: at rest with zero forces, the rest state of every method's step) over L. CPU: stepping the rod released
-// straight under the load for `duration`, the sag's first motion (the Newton iterations are
-// highest there).
+// same rod: at rest with zero forces, the rest state of every method's step) over L. CPU: stepping
+// the rod released straight under the load for `duration`, the sag's first motion (the Newton
+// iterations are highest there).
 inline WorkPoint sag_point(Method m, int n, double h, double duration,
                            const SagElastica::Tip& ref) {
   Rod rod = SagScene::rod(n);
