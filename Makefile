@@ -4,6 +4,8 @@
 #   make run     build (without the tests), then run the main job ($(RUN_CMD))
 #   make test    build, then every test through ctest (unit tests and rostests)
 #   make bench   build (without the tests), then the benchmarks
+#   make charts  build corde_charts, run its full sweep into docs/charts/ and draw the PNGs
+#                (minutes; docs/charts.md)
 #   make format  clang-format over src, include, test
 #   make clean   remove the build folder
 SHELL := /bin/bash
@@ -25,7 +27,7 @@ RUN_CMD    ?= roslaunch corde_sim corde_sim.launch headless:=$(if $(DISPLAY),fal
 SOURCE_DEVEL = export PATH="/usr/bin:$$PATH"; \
   if [ -f $(BUILD_DIR)/devel/setup.bash ]; then source $(BUILD_DIR)/devel/setup.bash; fi
 
-.PHONY: all deps configure build build-main run test bench format clean
+.PHONY: all deps configure build build-main run test bench charts format clean
 
 all: build
 
@@ -60,6 +62,12 @@ test: build
 bench: build-main
 	@if [ ! -x $(BUILD_DIR)/corde_bench ]; then echo "corde_bench is not built (src/tools/corde_bench.cpp missing?)"; exit 1; fi
 	./$(BUILD_DIR)/corde_bench $(BENCH_ARGS)
+
+charts: build-main
+	@if [ ! -x $(BUILD_DIR)/corde_charts ]; then echo "corde_charts is not built"; exit 1; fi
+	mkdir -p docs/charts
+	./$(BUILD_DIR)/corde_charts --out docs/charts
+	$(PYTHON) scripts/plot_charts.py docs/charts
 
 format:
 	@command -v clang-format >/dev/null || bash scripts/install_deps.sh --dev

@@ -14,6 +14,7 @@
 #include <ctime>
 #include <vector>
 
+#include "chart_stepper.h"
 #include "corde_sim/material.h"
 #include "corde_sim/rod.h"
 #include "corde_sim/rod_shape.h"
@@ -30,6 +31,8 @@ struct StepCase {
   bool ghost_clamp = true;     // false: node 0 and segment 0 fixed (the natural clamp)
   double periods = 5.0;        // length of the compared history in periods of mode 1
   double alpha = 0.01;         // P L^2 / B
+  charts::Method method = charts::Method::kSplitRotation;
+  double h = 0.0;  // > 0: this step (s) instead of step_fraction of the critical one
 };
 
 struct StepResult {
@@ -42,6 +45,8 @@ struct StepResult {
   double cpu_seconds = 0.0;           // CPU of the stepping loop
   double simulated_seconds = 0.0;
   bool finite = true;
+  long newton_failures = 0;    // implicit steps whose Newton iteration did not converge
+  long newton_iterations = 0;  // over all steps (implicit only)
 };
 
 // The first `count` roots of cos(b) cosh(b) + 1 = 0, written cos(b) + 1/cosh(b) = 0 so that
@@ -191,7 +196,7 @@ inline StepResult run_step_case(const StepCase& c) {
       Timoshenko{sec.bend, sec.kappa, sec.mass_per_length, sec.inertia_bend, 1.0}, 6);
   StepResult res;
   res.delta = c.alpha / 3.0;  // P L^3/(3B) with P = alpha B / L^2, L = 1
-  res.h = c.step_fraction * critical_time_step(rod);
+  res.h = c.h > 0.0 ? c.h : c.step_fraction * critical_time_step(rod);
   const double duration = c.periods * 2.0 * kPi / series.omega1();
   res.steps = std::lround(std::ceil(duration / res.h));
   res.simulated_seconds = res.steps * res.h;
@@ -199,13 +204,16 @@ inline StepResult run_step_case(const StepCase& c) {
   std::vector<double> tip;
   tip.reserve(res.steps / every + 2);
   const Vec3 g = Vec3::Zero();
+  charts::Stepper stepper(c.method);
   const std::clock_t start = std::clock();  // process CPU time: less sensitive to other load
   for (long i = 0; i < res.steps; ++i) {
-    rod.step(i * res.h, res.h, g);
+    stepper.step(rod, i * res.h, res.h, g);
     if ((i + 1) % every == 0) tip.push_back(-rod.positions().back().z());
   }
   res.cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
   res.finite = rod.finite();
+  res.newton_failures = stepper.newton_failures();
+  res.newton_iterations = stepper.newton_iterations();
   double sum = 0.0, sum_t = 0.0;
   for (size_t k = 0; k < tip.size(); ++k) {
     const double t = (k + 1) * every * res.h;
