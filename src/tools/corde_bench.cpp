@@ -35,8 +35,6 @@
 // BM_RopeOnFloorSelfContactImplicit/h_us: the coiled rope with the implicit integrator at that
 // step. BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned
 // at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
-// BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned at
-// one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
 // BM_StaticsMode/scene and BM_DynamicRelaxation/scene: statics as a mode (solve_scene_statics)
 // against dynamic relaxation (viscous) run until the forces vanish to the same tolerance,
 // on the shipped V2 cantilever (scene 0) and on a 100-element cable hanging between two pins (scene
