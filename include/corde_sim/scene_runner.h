@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "corde_sim/scene.h"
+#include "corde_sim/step_guard.h"
 #include "corde_sim/validity.h"
 
 namespace corde {
@@ -34,6 +35,12 @@ struct RunOptions {
   // Refuse runs of more steps (duration / time_step) than this: 1e15 s at 1e-300 s would
   // overflow the step counter, and 1e9 steps already take about 20 minutes for a small rod.
   double max_steps = 1e9;
+  // The stability guard (step_guard.h): checks every guard.check_every substeps, rolls back and
+  // retries with a smaller step or the implicit method. guard.enabled = false (corde_run
+  // --no-guard) runs the bare steps, with only the runaway checks above.
+  GuardSettings guard;
+  // Called with each guard event as it happens (corde_run prints them on stderr).
+  std::function<void(const GuardEvent&)> on_guard_event;
 };
 
 struct RunResult {
@@ -47,6 +54,12 @@ struct RunResult {
   WorldEnergies energies;     // at the end (or at failure)
   int every = 0;              // the CSV interval used
   bool write_failed = false;  // the CSV stream failed (disk full...): the run stopped there
+  // The guard's events (detections with their actions, returns to the user's step), and whether
+  // it gave up: then ok is false, problem says why, and the world is at its last good state.
+  std::vector<GuardEvent> guard_events;
+  bool guarded = true;  // the guard ran
+  bool guard_failed = false;
+  long guard_rollbacks = 0;
 };
 
 // The CSV header: t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw
@@ -76,7 +89,7 @@ std::string run_problem(const World& world, const RunOptions& options);
 RunResult run_scene(Scene* scene, const RunOptions& options = {});
 
 // Multiline summary: scene, rods and elements, steps, simulated and wall time, time per step,
-// final kinetic and elastic energy.
+// final kinetic and elastic energy, the guard's events.
 std::string run_summary(const Scene& scene, const RunResult& result);
 
 }  // namespace corde

@@ -42,7 +42,8 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   bump_time();
   pacer_.anchor(sim_time(), wall_seconds());
   res.success = true;
-  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s";
+  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s" + guard_note_;
+  guard_note_.clear();
   ROS_INFO("corde_sim: %s", res.message.c_str());
   return true;
 }
@@ -96,13 +97,13 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   for (const std::string& rod : plan.resample)
     for (size_t i = 0; i < world_.rods().size(); ++i)
       if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
-  take_snapshot();
+  const std::string note = restart_guard();
   bump_time();
   refresh_layout();
   res.success = true;
   res.message = "configured " +
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
-                summary + "(h/h_crit " + num(stability_margin_) + ")";
+                summary + "(h/h_crit " + num(stability_margin_) + ")" + note;
   ROS_INFO("corde_sim: %s", res.message.c_str());
   return true;
 }
@@ -131,13 +132,19 @@ bool SimNode::on_step(Step::Request& req, Step::Response& res) {
   }
   update_tf_holders();
   apply_inputs();
+  const int detections = recoveries_;
   run_steps(req.steps, std::numeric_limits<double>::infinity());
-  res.success = check_state();
+  res.success = settle_guard();
   if (res.success) check_holders_and_strain();
   res.time = sim_time();
-  res.message = res.success ? "stepped " + std::to_string(req.steps) + " step(s)"
-                            : "the state became invalid (" + last_problem_ +
-                                  "); restored the last good state";
+  res.message = !res.success ? "stopped at the last good state: the stability guard could not "
+                               "recover (" +
+                                   last_problem_ + "); ~reset or ~configure to resume"
+                : recoveries_ > detections
+                    ? "stepped " + std::to_string(req.steps) +
+                          " step(s); the stability guard rolled back and retried (" +
+                          last_problem_ + ")"
+                    : "stepped " + std::to_string(req.steps) + " step(s)";
   return true;
 }
 
@@ -215,6 +222,7 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
   res.message = "grasp '" + req.name + "' holds segment " + std::to_string(segment) + " of rod '" +
                 req.rod + "' (source " + to_string(source) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
+  guard_.mark_good(world_);  // a rollback goes back to the grasp, not to before it
   bump_time();
   refresh_layout();
   return true;
@@ -233,6 +241,7 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
   ROS_INFO("corde_sim: %s", res.message.c_str());
+  guard_.mark_good(world_);
   bump_time();
   refresh_layout();
   return true;

@@ -21,6 +21,10 @@
 // BM_GripperSweep (config/scenes/gripper_sweep.yaml, a link sweeping through a hanging cable at
 // 1 m/s: the whole run per iteration, its time per World::step and real-time factor).
 //
+// BM_GuardOverhead/guard: the stability guard's cost on config/scenes/default.yaml (40 elements,
+// its gripper held), 0.2 s per iteration through run_scene with the guard (1) or without (0,
+// corde_run --no-guard): us_per_step, for the ratio in the same run.
+//
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //   corde_bench --benchmark_filter=BM_RodStep/100
@@ -56,6 +60,7 @@
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/rod_system.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/scene_runner.h"
 #include "corde_sim/stability.h"
 #include "corde_sim/statics.h"
 #include "corde_sim/world.h"
@@ -684,3 +689,33 @@ BENCHMARK(BM_GripperSweep)->Unit(benchmark::kMillisecond);
 }  // namespace
 
 BENCHMARK_MAIN();
+
+// The stability guard's overhead (step_guard.h): one check and one snapshot per 16 steps, plus
+// the per-step work bound, on the default scene (see the comment at the top).
+void BM_GuardOverhead(benchmark::State& state) {
+  const bool guard = state.range(0) != 0;
+  corde::Scene base;
+  try {
+    base = corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/default.yaml");
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  long steps = 0;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    corde::Scene scene = base;
+    state.ResumeTiming();
+    corde::RunOptions options;
+    options.duration = 0.2;
+    options.guard.enabled = guard;
+    const corde::RunResult r = corde::run_scene(&scene, options);
+    steps += r.steps;
+    seconds += r.wall_seconds;
+    if (!r.ok || !r.guard_events.empty()) state.SkipWithError("the guard reported an event");
+  }
+  state.counters["us_per_step"] = steps > 0 ? 1e6 * seconds / static_cast<double>(steps) : 0.0;
+}
+
+BENCHMARK(BM_GuardOverhead)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);

@@ -20,7 +20,7 @@ const char* kUsage =
     "usage: corde_run SCENE.yaml [--duration S] [--dt H] [--set key.path=value ...]\n"
     "                 [--out FILE.csv] [--reactions FILE.csv] [--energies FILE.csv]\n"
     "                 [--every K] [--max-speed V] [--max-strain E]\n"
-    "                 [--max-energy J] [--max-steps N] [--quiet]\n"
+    "                 [--max-energy J] [--max-steps N] [--no-guard] [--quiet]\n"
     "  --duration S   simulated time (s), overrides the scene's duration\n"
     "  --dt H         time step (s), overrides the scene's time_step\n"
     "  --set K=V      override a scene key, e.g. --set rods.0.elements=100 (repeatable)\n"
@@ -35,6 +35,12 @@ const char* kUsage =
     "  --max-energy J stop when a rod's (kinetic + elastic energy) / mass exceeds J J/kg\n"
     "                 (default 1e5; 0: off)\n"
     "  --max-steps N  refuse runs of more than N steps (default 1e9)\n"
+    "  --no-guard     run without the stability guard (which checks the state every 16\n"
+    "                 steps, rolls back and retries with a smaller step or the implicit\n"
+    "                 method; docs/stability_guard.md), e.g. to benchmark the bare steps\n"
+    "exit status: 0 done (the guard may have recovered: see stderr and the summary),\n"
+    "  1 bad scene or file, 2 bad usage, 3 the run blew up (runaway checks, --no-guard),\n"
+    "  4 the guard could not recover (the run stopped at the last good state)\n"
     "  --quiet        print only errors\n";
 
 int usage_error(const std::string& msg) {
@@ -63,6 +69,8 @@ int main(int argc, char** argv) {
       return 0;
     } else if (a == "--quiet" || a == "-q") {
       quiet = true;
+    } else if (a == "--no-guard") {
+      options.guard.enabled = false;
     } else if (a == "--max-speed" || a == "--max-strain" || a == "--max-energy" ||
                a == "--max-steps") {
       if (!value(&v)) return usage_error(a + " needs a value");
@@ -146,6 +154,14 @@ int main(int argc, char** argv) {
       progress_shown = true;
     };
   }
+  // Guard events as they happen; with --quiet only the unrecoverable one (an error).
+  options.on_guard_event = [&](const corde::GuardEvent& e) {
+    const bool fatal = e.kind == corde::GuardEvent::Kind::kUnrecoverable;
+    if (quiet && !fatal) return;
+    if (progress_shown) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "corde_run: guard: %s%s\n", fatal ? "UNRECOVERABLE: " : "",
+                 e.message().c_str());
+  };
   corde::RunResult result;
   try {
     result = corde::run_scene(&scene, options);
@@ -169,6 +185,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "corde_run: error writing '%s' (disk full?)%s\n", failed_path.c_str(),
                  result.write_failed ? "; the run stopped there" : "");
     return 1;
+  }
+  if (!result.ok && result.guard_failed) {
+    std::fprintf(stderr,
+                 "corde_run: the stability guard could not recover (every retry failed); the run "
+                 "stopped at its last good state, t = %.6g s%s\n",
+                 result.failed_time,
+                 out_path.empty() && reactions_path.empty() && energies_path.empty()
+                     ? ""
+                     : "; the CSV files end with the last frame before it");
+    return 4;
   }
   if (!result.ok) {
     std::fprintf(stderr,
