@@ -49,7 +49,7 @@ struct RunResult {
   double wall_seconds = 0.0;  // time spent stepping (and writing CSV)
   bool ok = true;             // false: the state failed the checks at failed_step
   std::string problem;        // why, naming the rod and item ("" when ok)
-  long failed_step = -1;      // the step at which the checks (every 8 steps) failed
+  long failed_step = -1;      // the step at which the checks failed (the guard: its last good one)
   double failed_time = 0.0;   // the world's time after that step
   WorldEnergies energies;     // at the end (or at failure)
   int every = 0;              // the CSV interval used
@@ -82,9 +82,11 @@ void write_energy_rows(std::ostream& out, const World& world);
 std::string run_problem(const World& world, const RunOptions& options);
 
 // Steps the scene's world for the duration, holding each grasp where it is at the start or moving
-// it along its keyframes (GraspSpec::motion). Reactions are written from the first step on. Stops
-// at the first state that fails run_problem() (checked every 8 steps and before every CSV frame,
-// so the CSV ends with the last frame that passed) or when the CSV cannot be written. Throws
+// it along its keyframes (GraspSpec::motion), through the stability guard (options.guard).
+// Reactions are written from the first step on. Stops when the guard gives up (the world at its
+// last good state), at the first state that fails run_problem() (checked before every CSV frame,
+// and every 8 steps without the guard, so the CSV ends with the last frame that passed) or when
+// the CSV cannot be written. Throws
 // SceneError if the duration needs more than options.max_steps steps (or the step is not > 0).
 RunResult run_scene(Scene* scene, const RunOptions& options = {});
 

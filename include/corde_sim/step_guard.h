@@ -21,8 +21,9 @@ struct GuardSettings {
   bool enabled = true;
   // Substeps between checks; every check that passes takes a snapshot. A blow-up grows
   // geometrically, so a few tens of steps between checks lose nothing but a short replay, and
-  // keep the cost (one energy pass and one copy per check) to a few percent of the steps.
-  int check_every = 16;
+  // keep the cost (a pass over the state, one energy evaluation and one copy of the world per
+  // check, about 1.5 steps' worth) to a few percent of the steps (BM_GuardOverhead).
+  int check_every = 64;
   // Runaway speeds (as ValidityLimits, validity.h): no cable in a manipulation scene moves at
   // 100 m/s or spins at 1e5 rad/s, and a blow-up crosses these within a few steps.
   double max_speed = 100.0;        // m/s, any node
@@ -168,10 +169,11 @@ class StepGuard {
   bool advance(World* world, long n, bool check_at_end, const StepFn& fn);
   bool run(World* world, long n, bool check_at_end, const StepFn& fn);
   void sync_user_settings(const World& world);
-  void snapshot(const World& world);
+  // Energies: the state's, when the check just computed them.
+  void snapshot(const World& world, const WorldEnergies* energies = nullptr);
   void rollback(World* world);
   bool reduce(const World& world, const GuardProblem& p, double t_fail);
-  GuardProblem check(const World& world) const;
+  GuardProblem check(const World& world, WorldEnergies* energies) const;
   void add_step_work(const World& world, double h);
   void push_event(const GuardEvent& e);
   void apply(World* world) const {

@@ -195,10 +195,10 @@ void StepGuard::sync_user_settings(const World& world) {
   trial_ = false;
 }
 
-void StepGuard::snapshot(const World& world) {
+void StepGuard::snapshot(const World& world, const WorldEnergies* energies) {
   world.copy_to(&snap_);
   have_snap_ = true;
-  const WorldEnergies e = world.energies();
+  const WorldEnergies e = energies ? *energies : world.energies();
   snap_energy_ = e.kinetic() + e.elastic() + e.total.gravity;
   snap_scale_ = e.kinetic() + e.elastic();
   work_ = 0.0;
@@ -216,10 +216,12 @@ void StepGuard::rollback(World* world) {
   ++rollbacks_;
 }
 
-GuardProblem StepGuard::check(const World& world) const {
+GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const {
   GuardProblem p = check_state(world, settings_);
-  if (p.found || settings_.energy_tolerance <= 0.0) return p;
+  if (p.found) return p;
   const WorldEnergies e = world.energies();
+  *energies = e;
+  if (settings_.energy_tolerance <= 0.0) return p;
   const double rise = e.kinetic() + e.elastic() + e.total.gravity - snap_energy_;
   const double allowed =
       work_ + settings_.energy_tolerance * snap_scale_ + settings_.energy_floor * mgl_ + 1e-12;
@@ -395,16 +397,17 @@ bool StepGuard::run(World* world, long n, bool check_at_end, const StepFn& fn) {
       return true;
     }
     GuardProblem p;
+    WorldEnergies energies;
     if (!threw.empty()) {
       p.found = true;
       p.kind = GuardEvent::Kind::kNonFinite;
       p.detail = "the step threw: " + threw;
     } else {
-      p = check(*world);
+      p = check(*world, &energies);
     }
     if (!p.found) {
       goal -= since_snap_;
-      snapshot(*world);
+      snapshot(*world, &energies);
       const double t = world->time();
       if (trial_ && t - good_since_ >= relax_after_) {
         trial_ = false;  // the user's setting holds again

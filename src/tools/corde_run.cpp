@@ -35,7 +35,7 @@ const char* kUsage =
     "  --max-energy J stop when a rod's (kinetic + elastic energy) / mass exceeds J J/kg\n"
     "                 (default 1e5; 0: off)\n"
     "  --max-steps N  refuse runs of more than N steps (default 1e9)\n"
-    "  --no-guard     run without the stability guard (which checks the state every 16\n"
+    "  --no-guard     run without the stability guard (which checks the state every 64\n"
     "                 steps, rolls back and retries with a smaller step or the implicit\n"
     "                 method; docs/stability_guard.md), e.g. to benchmark the bare steps\n"
     "exit status: 0 done (the guard may have recovered: see stderr and the summary),\n"

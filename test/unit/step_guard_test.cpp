@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -232,6 +233,43 @@ TEST(StepGuard, StateChecksNameRodAndItem) {
     Scene s = cantilever(Integrator::kSplitRotation);
     s.world.rods()[0].velocities()[3].y() = std::nan("");
     EXPECT_EQ(check_state(s.world, gs).kind, Kind::kNonFinite);
+  }
+}
+
+// run_scene (corde_run) through the guard: a recovery is reported in the events and the summary
+// and the run ends well; a failure no retry cures stops the run at the last good state, with
+// no frame after it, and the summary says so.
+TEST(StepGuard, RunSceneReportsRecoveryAndFailure) {
+  for (double factor : {4.0, 1000.0}) {
+    SCOPED_TRACE(factor);
+    Scene s = cantilever(Integrator::kSplitRotation);
+    s.world.time_step = factor * critical_time_step(s.world.rods()[0]);
+    RunOptions o;
+    o.duration = 0.02;
+    o.guard.allow_implicit = false;
+    std::ostringstream csv;
+    o.csv = &csv;
+    o.every = 10;
+    int seen = 0;
+    o.on_guard_event = [&](const GuardEvent&) { ++seen; };
+    const RunResult r = run_scene(&s, o);
+    EXPECT_EQ(seen, static_cast<int>(r.guard_events.size()));
+    ASSERT_FALSE(r.guard_events.empty());
+    EXPECT_TRUE(all_finite(s.world));
+    const std::string summary = run_summary(s, r);
+    if (factor == 4.0) {
+      EXPECT_TRUE(r.ok) << r.problem;
+      EXPECT_NE(summary.find("guard      recovered"), std::string::npos) << summary;
+      continue;
+    }
+    EXPECT_FALSE(r.ok);
+    EXPECT_TRUE(r.guard_failed);
+    EXPECT_NE(summary.find("UNRECOVERABLE"), std::string::npos) << summary;
+    EXPECT_NE(r.problem.find("unrecoverable"), std::string::npos) << r.problem;
+    // The last frame written is not later than the state the run stopped at.
+    const std::string text = csv.str();
+    const size_t last = text.rfind('\n', text.size() - 2) + 1;
+    EXPECT_LE(std::stod(text.substr(last, text.find(',', last) - last)), r.failed_time + 1e-12);
   }
 }
 

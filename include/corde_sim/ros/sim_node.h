@@ -132,7 +132,7 @@ class SimNode {
   // Loop and outputs.
   void advance(double now);
   // The stability guard (corde::StepGuard) checks the state after each batch of steps (and every
-  // 16 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
+  // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
   // returns false while it has given up (the world then stays at its last good state).
   bool settle_guard();
   void report_guard_events();
