@@ -87,6 +87,10 @@ struct GuardEvent {
 
 const char* guard_event_kind_name(GuardEvent::Kind kind);
 
+// Whether the library's World::step runs Integrator::kImplicitEuler, so that the guard can fall
+// back on it (allow_implicit).
+bool guard_has_implicit();
+
 // The first problem found in a state (found false when none).
 struct GuardProblem {
   bool found = false;

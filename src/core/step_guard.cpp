@@ -4,14 +4,28 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <type_traits>
 
 #include "corde_sim/stability.h"
 
 namespace corde {
 namespace {
 
-// PRE-MERGE stand-ins for Integrator::kImplicitEuler and integrator_name() (main's next commit).
-constexpr Integrator kImplicit = static_cast<Integrator>(2);
+// Integrator::kImplicitEuler where World::step runs it, found at compile time so that the guard
+// builds (without the implicit fallback) against a library that does not have it yet.
+template <class E, class = void>
+struct ImplicitOf {
+  static constexpr bool kAvailable = false;
+  static constexpr E kValue = E::kSemiImplicitEuler;
+};
+template <class E>
+struct ImplicitOf<E, std::void_t<decltype(E::kImplicitEuler)>> {
+  static constexpr bool kAvailable = true;
+  static constexpr E kValue = E::kImplicitEuler;
+};
+constexpr bool kHaveImplicit = ImplicitOf<Integrator>::kAvailable;
+constexpr Integrator kImplicit = ImplicitOf<Integrator>::kValue;
+
 const char* method_name(Integrator i) {
   if (i == Integrator::kSemiImplicitEuler) return "semi_implicit_euler";
   if (i == Integrator::kSplitRotation) return "split_rotation";
@@ -57,6 +71,8 @@ double angle_between(const Quat& a, const Quat& b) {
 }
 
 }  // namespace
+
+bool guard_has_implicit() { return kHaveImplicit; }
 
 const char* guard_event_kind_name(GuardEvent::Kind kind) {
   switch (kind) {
@@ -309,7 +325,8 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
   e.detail = p.detail;
   e.rollback_to = world.time();
   const bool threw = p.detail.rfind("the step threw", 0) == 0;
-  const bool explicit_method = integrator_ != kImplicit;
+  const bool explicit_method = !kHaveImplicit || integrator_ != kImplicit;
+  const bool allow_implicit = settings_.allow_implicit && kHaveImplicit;
   if (trial_) {
     // The user's setting failed again: back to the one that worked, and wait longer next time.
     trial_ = false;
@@ -317,11 +334,12 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
     integrator_ = saved_integrator_;
     halvings_ = saved_halvings_;
     relax_after_ *= 2.0;
-    e.action = integrator_ == kImplicit && explicit_method ? GuardEvent::Action::kImplicit
-                                                           : GuardEvent::Action::kHalveStep;
+    e.action = kHaveImplicit && integrator_ == kImplicit && explicit_method
+                   ? GuardEvent::Action::kImplicit
+                   : GuardEvent::Action::kHalveStep;
   } else {
     bool halve = !threw && halvings_ < settings_.max_halvings;
-    if (halve && explicit_method && settings_.allow_implicit) {
+    if (halve && explicit_method && allow_implicit) {
       // Halving cannot help when even the last allowed halving stays above the explicit limit.
       double limit = 1e300;
       for (const Rod& rod : world.rods()) limit = std::min(limit, critical_time_step(rod));
@@ -331,7 +349,7 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
       ++halvings_;
       h_ = user_h_ / std::ldexp(1.0, halvings_);
       e.action = GuardEvent::Action::kHalveStep;
-    } else if (explicit_method && settings_.allow_implicit) {
+    } else if (explicit_method && allow_implicit) {
       integrator_ = kImplicit;
       halvings_ = 0;
       h_ = user_h_;

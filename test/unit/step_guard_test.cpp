@@ -105,6 +105,32 @@ INSTANTIATE_TEST_SUITE_P(Methods, ExplicitBeyondLimit,
                          ::testing::Values(Integrator::kSplitRotation,
                                            Integrator::kSemiImplicitEuler));
 
+// 20x the limit: three halvings would still leave the step 2.5x above the limit, so the guard
+// switches to the implicit method at once (at the scene's step), and the run ends finite.
+TEST_P(ExplicitBeyondLimit, FarBeyondSwitchesToImplicit) {
+  if (!guard_has_implicit()) GTEST_SKIP() << "World::step does not run the implicit method";
+  Scene s = cantilever(GetParam());
+  World& w = s.world;
+  const double hc = critical_time_step(w.rods()[0]);
+  w.time_step = 20.0 * hc;
+  StepGuard guard;
+  guard.reset(w);
+  const long steps = std::lround(0.05 / w.time_step);
+  ASSERT_TRUE(guard.step(&w, steps));
+  ASSERT_TRUE(guard.settle(&w));
+  EXPECT_TRUE(all_finite(w));
+  EXPECT_NEAR(w.time(), steps * 20.0 * hc, 1e-9);
+  ASSERT_FALSE(guard.events().empty());
+  const GuardEvent& first = guard.events().front();
+  EXPECT_EQ(first.action, Action::kImplicit) << first.message();
+  EXPECT_DOUBLE_EQ(first.time_step, 20.0 * hc);
+  EXPECT_NE(first.message().find("implicit"), std::string::npos) << first.message();
+  EXPECT_TRUE(guard.reduced());
+  EXPECT_EQ(w.integrator, GetParam());  // the world shows the scene's method between calls
+  // The cantilever swung down under gravity (it did not freeze).
+  EXPECT_LT(w.rods()[0].positions().back().z(), 1.0 - 1e-3);
+}
+
 // 1000x the limit and no implicit fallback: three halvings cannot reach the limit, so the guard
 // gives up at once, reports it, and leaves the world exactly at its last good state.
 TEST(StepGuard, UnrecoverableKeepsTheLastGoodState) {
@@ -116,7 +142,8 @@ TEST(StepGuard, UnrecoverableKeepsTheLastGoodState) {
   StepGuard guard(gs);
   guard.reset(w);
   const World start = w;
-  EXPECT_FALSE(guard.step(&w, 40));
+  // 40 steps are fewer than a check's interval: settle() checks them (as before a frame).
+  EXPECT_FALSE(guard.step(&w, 40) && guard.settle(&w));
   EXPECT_TRUE(guard.failed());
   EXPECT_TRUE(all_finite(w));
   EXPECT_EQ(w.time(), start.time());
@@ -126,6 +153,7 @@ TEST(StepGuard, UnrecoverableKeepsTheLastGoodState) {
   EXPECT_EQ(guard.events().back().action, Action::kGiveUp);
   // It stays failed, and the world where it was, until reset.
   EXPECT_FALSE(guard.step(&w, 5));
+  EXPECT_FALSE(guard.settle(&w));
   EXPECT_EQ(w.time(), start.time());
   w.time_step = 0.5 * critical_time_step(w.rods()[0]);
   guard.reset(w);
