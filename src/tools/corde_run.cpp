@@ -38,10 +38,10 @@ const char* kUsage =
     "  --no-guard     run without the stability guard (which checks the state every 64\n"
     "                 steps, rolls back and retries with a smaller step or the implicit\n"
     "                 method; docs/stability_guard.md), e.g. to benchmark the bare steps\n"
+    "  --quiet        print only errors\n"
     "exit status: 0 done (the guard may have recovered: see stderr and the summary),\n"
     "  1 bad scene or file, 2 bad usage, 3 the run blew up (runaway checks, --no-guard),\n"
-    "  4 the guard could not recover (the run stopped at the last good state)\n"
-    "  --quiet        print only errors\n";
+    "  4 the guard could not recover (the run stopped at the last good state)\n";
 
 int usage_error(const std::string& msg) {
   std::fprintf(stderr, "corde_run: %s\n%s", msg.c_str(), kUsage);
