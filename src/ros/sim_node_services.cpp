@@ -9,7 +9,26 @@
 
 namespace corde_sim {
 
+std::string SimNode::stopped_note() const {
+  return guard_.failed() ? "; the simulation is still stopped at its last good state (stability "
+                           "guard: " +
+                               last_problem_ + ")"
+                         : "";
+}
+
 bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
+  reset(req, res);
+  if (!res.success) res.message += stopped_note();
+  return true;
+}
+
+bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
+  configure(req, res);
+  if (!res.success) res.message += stopped_note();
+  return true;
+}
+
+void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   std::string path = scene_path_;
   if (!req.scene.empty()) {
     std::string error;
@@ -17,7 +36,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
     if (path.empty()) {
       res.success = false;
       res.message = "scene not loaded, state unchanged: " + error;
-      return true;
+      return;
     }
   }
   corde::Scene scene;
@@ -28,7 +47,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("scene not loaded, state unchanged: ") + e.what();
-    return true;
+    return;
   }
   // The new world starts at its own time 0; the node's clock continues from where it was.
   const double t = sim_time();
@@ -36,7 +55,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   if (!error.empty()) {
     res.success = false;
     res.message = "scene not used, state unchanged: " + error;
-    return true;
+    return;
   }
   time_offset_ = t;
   bump_time();
@@ -45,10 +64,10 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s" + guard_note_;
   guard_note_.clear();
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  return true;
+  return;
 }
 
-bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
+void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   ConfigurePlan plan;
   std::string error =
       plan_configure(world_, req.rod, req.keys, req.values, req.flags,
@@ -56,7 +75,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   if (!error.empty()) {
     res.success = false;
     res.message = error;
-    return true;
+    return;
   }
   // Work on copies; keep them only if everything succeeds.
   corde::World world = world_;
@@ -74,7 +93,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("rejected, nothing changed: ") + e.what();
-    return true;
+    return;
   }
   double margin = 0.0;
   std::string limiting;
@@ -90,7 +109,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
     res.message = "rejected, nothing changed: time_step " + num(world.time_step) +
                   " s would exceed the stability limit of rod '" + limiting + "' (h/h_crit " +
                   num(margin) + "); give a smaller time_step in the same request";
-    return true;
+    return;
   }
   std::swap(world_, world);
   settings_ = settings;
@@ -105,7 +124,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
                 summary + "(h/h_crit " + num(stability_margin_) + ")" + note;
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  return true;
+  return;
 }
 
 bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {

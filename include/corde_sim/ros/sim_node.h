@@ -122,6 +122,10 @@ class SimNode {
   // Services.
   bool on_reset(Reset::Request& req, Reset::Response& res);
   bool on_configure(Configure::Request& req, Configure::Response& res);
+  void reset(Reset::Request& req, Reset::Response& res);
+  void configure(Configure::Request& req, Configure::Response& res);
+  // "" or, while the guard has given up, what a refused ~reset or ~configure adds to its reply.
+  std::string stopped_note() const;
   bool on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool on_step(Step::Request& req, Step::Response& res);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
