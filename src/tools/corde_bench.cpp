@@ -61,9 +61,9 @@
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/rod_system.h"
 #include "corde_sim/scene.h"
-#include "corde_sim/step_guard.h"
 #include "corde_sim/stability.h"
 #include "corde_sim/statics.h"
+#include "corde_sim/step_guard.h"
 #include "corde_sim/world.h"
 
 namespace {
