@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "corde_sim/scene.h"
+#include "corde_sim/step_guard.h"
 #include "corde_sim/validity.h"
 
 namespace corde {
@@ -34,6 +35,12 @@ struct RunOptions {
   // Refuse runs of more steps (duration / time_step) than this: 1e15 s at 1e-300 s would
   // overflow the step counter, and 1e9 steps already take about 20 minutes for a small rod.
   double max_steps = 1e9;
+  // The stability guard (step_guard.h): checks every guard.check_every substeps, rolls back and
+  // retries with a smaller step or the implicit method. guard.enabled = false (corde_run
+  // --no-guard) runs the bare steps, with only the runaway checks above.
+  GuardSettings guard;
+  // Called with each guard event as it happens (corde_run prints them on stderr).
+  std::function<void(const GuardEvent&)> on_guard_event;
 };
 
 struct RunResult {
@@ -42,11 +49,17 @@ struct RunResult {
   double wall_seconds = 0.0;  // time spent stepping (and writing CSV)
   bool ok = true;             // false: the state failed the checks at failed_step
   std::string problem;        // why, naming the rod and item ("" when ok)
-  long failed_step = -1;      // the step at which the checks (every 8 steps) failed
+  long failed_step = -1;      // the step at which the checks failed (the guard: its last good one)
   double failed_time = 0.0;   // the world's time after that step
   WorldEnergies energies;     // at the end (or at failure)
   int every = 0;              // the CSV interval used
   bool write_failed = false;  // the CSV stream failed (disk full...): the run stopped there
+  // The guard's events (detections with their actions, returns to the user's step), and whether
+  // it gave up: then ok is false, problem says why, and the world is at its last good state.
+  std::vector<GuardEvent> guard_events;
+  bool guarded = true;  // the guard ran
+  bool guard_failed = false;
+  long guard_rollbacks = 0;
 };
 
 // The CSV header: t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw
@@ -69,14 +82,16 @@ void write_energy_rows(std::ostream& out, const World& world);
 std::string run_problem(const World& world, const RunOptions& options);
 
 // Steps the scene's world for the duration, holding each grasp where it is at the start or moving
-// it along its keyframes (GraspSpec::motion). Reactions are written from the first step on. Stops
-// at the first state that fails run_problem() (checked every 8 steps and before every CSV frame,
-// so the CSV ends with the last frame that passed) or when the CSV cannot be written. Throws
+// it along its keyframes (GraspSpec::motion), through the stability guard (options.guard).
+// Reactions are written from the first step on. Stops when the guard gives up (the world at its
+// last good state), at the first state that fails run_problem() (checked before every CSV frame,
+// and every 8 steps without the guard, so the CSV ends with the last frame that passed) or when
+// the CSV cannot be written. Throws
 // SceneError if the duration needs more than options.max_steps steps (or the step is not > 0).
 RunResult run_scene(Scene* scene, const RunOptions& options = {});
 
 // Multiline summary: scene, rods and elements, steps, simulated and wall time, time per step,
-// final kinetic and elastic energy.
+// final kinetic and elastic energy, the guard's events.
 std::string run_summary(const Scene& scene, const RunResult& result);
 
 }  // namespace corde

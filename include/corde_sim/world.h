@@ -67,6 +67,10 @@ class World {
   }
   bool finite() const;
   WorldEnergies energies() const;
+  // Copies this world into *out (a snapshot, or a restore from one), the contact stage's
+  // warm-start impulses included but not shared: a plain copy shares the contact stage, and the
+  // world that steps next then starts its contacts cold. Reuses out's memory.
+  void copy_to(World* out) const;
 
  private:
   std::vector<Rod> rods_;

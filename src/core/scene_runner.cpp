@@ -173,15 +173,51 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   if (options.energies) write_energy_header(*options.energies);
   if (options.reactions) write_reaction_header(*options.reactions);
   if (any_output && r.ok) write(false);
-  for (long i = 1; r.ok && i <= steps && !r.write_failed; ++i) {
-    move_holders(world.time() + h);
-    world.step();
+  StepGuard guard(options.guard);
+  guard.reset(world);
+  const double t_start = world.time();
+  const StepGuard::StepFn step_fn = [&](World* w) {
+    move_holders(w->time() + w->time_step);
+    w->step();
+  };
+  long events_seen = 0;
+  auto take_events = [&] {
+    if (guard.events_total() == events_seen) return;
+    for (const GuardEvent& e : guard.events_since(events_seen)) {
+      r.guard_events.push_back(e);
+      if (options.on_guard_event) options.on_guard_event(e);
+    }
+    events_seen = guard.events_total();
+  };
+  const bool guarded = options.guard.enabled;
+  r.guarded = guarded;
+  // Steps in batches up to the next frame, progress report or (without the guard) runaway check.
+  for (long i = 0; r.ok && i < steps && !r.write_failed;) {
+    long next = std::min(steps, (i / 256 + 1) * 256);
+    if (any_output) next = std::min(next, (i / r.every + 1) * r.every);
+    if (!guarded) next = std::min(next, (i / 8 + 1) * 8);
+    const bool frame = any_output && (next % r.every == 0 || next == steps);
+    bool good = guard.step(&world, next - i, step_fn);
+    // No frame and no end state unchecked: the guard checks them now.
+    if (good && guarded && (frame || next == steps)) good = guard.settle(&world, step_fn);
+    take_events();
+    if (!good) {
+      // The world is back at its last good state, a whole number of steps from the start.
+      r.steps = std::lround((world.time() - t_start) / h);
+      r.ok = false;
+      r.guard_failed = true;
+      r.problem = guard.events().empty() ? "the guard gave up" : guard.events().back().message();
+      r.failed_step = r.steps;
+      r.failed_time = world.time();
+      break;
+    }
+    i = next;
     r.steps = i;
-    const bool frame = any_output && (i % r.every == 0 || i == steps);
-    // Every 8 steps (a blow-up grows over tens of steps; checking every step would cost about 10%
-    // of a small rod's step) and before every frame, so that no bad state is written.
-    const std::string problem =
-        frame || i % 8 == 0 || i == steps ? run_problem(world, options) : std::string();
+    // Every 8 steps without the guard (a blow-up grows over tens of steps; checking every step
+    // would cost about 10% of a small rod's step), and before every frame, so that no bad state
+    // is written.
+    const bool check = frame || i == steps || !guarded;
+    const std::string problem = check ? run_problem(world, options) : std::string();
     if (!problem.empty()) {
       r.ok = false;
       r.problem = problem;
@@ -198,6 +234,7 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
       }
     }
   }
+  r.guard_rollbacks = guard.rollbacks();
   r.wall_seconds = wall();
   r.sim_time = world.time();
   r.energies = world.energies();
@@ -228,6 +265,27 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   out += buf;
   std::snprintf(buf, sizeof buf, "energy     kinetic %.6g J, elastic %.6g J%s\n",
                 r.energies.kinetic(), r.energies.elastic(), r.ok ? "" : " (at failure)");
+  out += buf;
+  int detected = 0, restored = 0;
+  for (const GuardEvent& e : r.guard_events) {
+    if (e.kind == GuardEvent::Kind::kRestored)
+      ++restored;
+    else if (e.kind != GuardEvent::Kind::kUnrecoverable)
+      ++detected;
+  }
+  if (!r.guarded)
+    std::snprintf(buf, sizeof buf, "guard      off\n");
+  else if (r.guard_failed)
+    std::snprintf(buf, sizeof buf,
+                  "guard      UNRECOVERABLE after %d detection(s), %ld rollback(s)\n", detected,
+                  r.guard_rollbacks);
+  else if (detected > 0)
+    std::snprintf(buf, sizeof buf,
+                  "guard      recovered: %d detection(s), %ld rollback(s), %d return(s) to the "
+                  "scene's step\n",
+                  detected, r.guard_rollbacks, restored);
+  else
+    std::snprintf(buf, sizeof buf, "guard      no events\n");
   out += buf;
   return out;
 }

@@ -66,6 +66,19 @@ bool World::finite() const {
   return true;
 }
 
+void World::copy_to(World* out) const {
+  if (out == this) return;
+  std::shared_ptr<ContactSystem> mine = std::move(out->contacts_);
+  *out = *this;
+  if (!contacts_) return;
+  if (mine && mine.use_count() == 1 && mine != contacts_) {
+    *mine = *contacts_;
+    out->contacts_ = std::move(mine);
+  } else {
+    out->contacts_ = std::make_shared<ContactSystem>(*contacts_);
+  }
+}
+
 WorldEnergies World::energies() const {
   WorldEnergies w;
   for (const Rod& r : rods_) {

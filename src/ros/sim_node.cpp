@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "corde_sim/stability.h"
@@ -53,8 +54,12 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "node to publish /clock; stamps are that clock's time at start-up plus simulation "
         "time");
 
-  validity_.max_speed = params_.max_node_speed;
-  validity_.max_angular_speed = params_.max_angular_speed;
+  corde::GuardSettings guard_settings;
+  guard_settings.max_speed = params_.max_node_speed;
+  guard_settings.max_angular_speed = params_.max_angular_speed;
+  guard_.set_settings(guard_settings);
+  guard_.set_hooks([this] { guard_grasps_ = grasps_; }, [this] { grasps_ = guard_grasps_; });
+  step_fn_ = [this](corde::World* w) { step_once(w); };
   corde::Scene scene;
   std::string resolve_error;
   const std::string scene_file = resolve_scene(params_.scene, &resolve_error);
@@ -147,25 +152,28 @@ void SimNode::update_stability() {
   }
 }
 
+void SimNode::step_once(corde::World* world) {
+  const double h = world->time_step;  // the guard's, while it runs a halved step
+  if (!scripted_.empty()) drive_scripted(world->time(), h);
+  if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h);
+  if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);
+  world->step();
+  if (!grasps_.empty()) grasps_.after_step(*world, h);
+  if (const corde::ContactSystem* c = world->contacts())
+    max_penetration_since_state_ =
+        std::max(max_penetration_since_state_, c->stats().max_penetration);
+}
+
 long SimNode::run_steps(long n, double deadline) {
-  const double h = world_.time_step;
   const double t0 = wall_seconds();
   const double c0 = thread_cpu_seconds();
   long k = 0;
-  const bool grasps = !grasps_.empty();
   scripted_.clear();  // keeps its capacity
   for (const auto& kv : wiring_)
     if (kv.second.script) scripted_.emplace_back(&kv.first, &kv.second);
-  for (; k < n; ++k) {
+  for (; k < n && !guard_.failed(); ++k) {
     if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
-    if (!scripted_.empty()) drive_scripted(world_.time(), h);
-    if (grasps) grasps_.before_step(world_, world_.time(), h);
-    if (!robot_.empty()) robot_.before_step(world_.obstacles.get(), h);
-    world_.step();
-    if (grasps) grasps_.after_step(world_, h);
-    if (const corde::ContactSystem* c = world_.contacts())
-      max_penetration_since_state_ =
-          std::max(max_penetration_since_state_, c->stats().max_penetration);
+    if (!guard_.step(&world_, 1, step_fn_)) break;
   }
   const double dt = wall_seconds() - t0;
   step_cpu_total_ += thread_cpu_seconds() - c0;
@@ -178,60 +186,73 @@ long SimNode::run_steps(long n, double deadline) {
 
 void SimNode::advance(double now) {
   apply_inputs();
+  if (guard_.failed()) {
+    // Stopped at the last good state: the clock goes on (tf and /clock listeners see the state
+    // held, not a frozen time) and the state is published as it is until a reset or configure.
+    const long due = pacer_.paced() ? pacer_.steps_due(sim_time(), now, world_.time_step) : 1;
+    time_offset_ += static_cast<double>(std::max(0L, due)) * world_.time_step;
+    return;
+  }
   if (pacer_.paced()) {
     const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
     // A batch may take a few loop periods; beyond that the simulation cannot keep up, and the
     // backlog is dropped instead of growing (the measured real-time factor shows it).
     const double budget = std::max(3.0 / params_.loop_rate, 0.02);
     const long done = due > 0 ? run_steps(due, now + budget) : 0;
-    lagging_ = done < due;
+    lagging_ = done < due && !guard_.failed();
     if (lagging_) pacer_.anchor(sim_time(), wall_seconds());
   } else {
     // As fast as possible, in slices short enough to serve callbacks and outputs on time.
     const double slice_end = std::min(now + 0.005, schedule_.next_due());
     run_steps(std::numeric_limits<long>::max(), std::max(slice_end, now));
   }
-  if (check_state()) check_holders_and_strain();
+  if (settle_guard()) check_holders_and_strain();
 }
 
-void SimNode::take_snapshot() {
-  last_good_.world = world_;
-  last_good_.grasps = grasps_;
+bool SimNode::settle_guard() {
+  const double t = sim_time();
+  const bool ok = !guard_.failed() && guard_.settle(&world_, step_fn_);
+  // After giving up the world is back at its last good state: the clock keeps going forward.
+  if (!ok && sim_time() < t) time_offset_ = t - world_.time();
+  report_guard_events();
+  return ok;
 }
 
-bool SimNode::check_state() {
-  const std::string problem = corde::validity_problem(world_, validity_);
-  if (problem.empty()) return true;
-  // The step has lost stability (or an input drove it there): go back to the last state that
-  // passed this check, with the holders stopped where they were then. If that keeps happening,
-  // also drop the velocities, which may carry the instability.
-  const double t = sim_time(), wall = wall_seconds();
-  world_ = last_good_.world;
-  grasps_ = last_good_.grasps;
-  grasps_.stop_all();
-  inputs_.clear();
-  recovery_walls_.push_back(wall);
-  recovery_walls_.erase(std::remove_if(recovery_walls_.begin(), recovery_walls_.end(),
-                                       [&](double w) { return w < wall - 1.0; }),
-                        recovery_walls_.end());
-  const bool repeated = recovery_walls_.size() >= 3;
-  if (repeated) {
-    for (corde::Rod& rod : world_.rods()) {
-      for (auto& v : rod.velocities()) v.setZero();
-      for (auto& w : rod.angular_velocities()) w.setZero();
+void SimNode::report_guard_events() {
+  if (guard_.events_total() == guard_events_seen_) return;
+  const std::vector<corde::GuardEvent> events = guard_.events_since(guard_events_seen_);
+  guard_events_seen_ = guard_.events_total();
+  for (const corde::GuardEvent& e : events) {
+    // Times in the node's clock.
+    const double offset = time_offset_;
+    char when[64];
+    std::snprintf(when, sizeof when, "(node time %.6f s) ", offset + e.time);
+    if (e.kind == corde::GuardEvent::Kind::kRestored) {
+      ROS_INFO_THROTTLE(5.0, "corde_sim: stability guard: %s%s", when, e.message().c_str());
+      continue;
     }
+    last_problem_ = e.message();
+    if (e.kind == corde::GuardEvent::Kind::kUnrecoverable) {
+      ROS_ERROR(
+          "corde_sim: stability guard: %sno retry helped: %s. The simulation stopped at its "
+          "last good state (published as it is); ~reset, or ~configure with a smaller "
+          "time_step or another integrator, resumes it",
+          when, e.message().c_str());
+      continue;
+    }
+    ++recoveries_;
+    ROS_WARN_THROTTLE(1.0, "corde_sim: stability guard: %s%s (h/h_crit %.2f, limiting rod '%s')",
+                      when, e.message().c_str(), stability_margin_, limiting_rod_.c_str());
   }
-  time_offset_ = t - world_.time();  // the clock keeps going forward
-  ++recoveries_;
-  last_problem_ = problem;
-  pacer_.anchor(sim_time(), wall_seconds());
-  ROS_ERROR_THROTTLE(
-      1.0,
-      "corde_sim: the state became invalid at t = %.6f s (%s); restored the last good "
-      "state%s (h/h_crit = %.2f, limiting rod '%s'; a smaller time_step may help)",
-      t, problem.c_str(), repeated ? " at rest (3 recoveries within 1 s)" : "", stability_margin_,
-      limiting_rod_.c_str());
-  return false;
+}
+
+std::string SimNode::restart_guard() {
+  std::string note;
+  if (guard_.failed())
+    note = "; the simulation had stopped (stability guard: " + last_problem_ + ") and resumes";
+  report_guard_events();
+  guard_.reset(world_);  // snapshots world_ and grasps_
+  return note;
 }
 
 std::vector<GraspView> SimNode::grasp_views() const {
@@ -356,20 +377,22 @@ void SimNode::publish_due(double now) {
     if (params_.state_rate > 0.0) publish_state();
     max_penetration_since_state_ = 0.0;
     publish_reactions();
-    // What is published passed check_state(): the state to fall back on (copied at this rate
-    // only; a copy reuses the snapshot's storage).
-    take_snapshot();
   }
 }
 
 void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   using diagnostic_msgs::DiagnosticStatus;
   const double target = params_.real_time_factor;
-  if (recoveries_ > recoveries_reported_) {
+  if (guard_.failed()) {
     stat.summaryf(DiagnosticStatus::ERROR,
-                  "state became invalid (non-finite or blown up) %d time(s); restored the last "
-                  "good state (%s)",
-                  recoveries_ - recoveries_reported_, last_problem_.c_str());
+                  "stopped at the last good state: the stability guard could not recover (%s); "
+                  "~reset or ~configure to resume",
+                  last_problem_.c_str());
+  } else if (recoveries_ > recoveries_reported_) {
+    stat.summaryf(DiagnosticStatus::WARN,
+                  "the stability guard rolled back and retried %d time(s) (last: %s)%s",
+                  recoveries_ - recoveries_reported_, last_problem_.c_str(),
+                  guard_.reduced() ? "; running a reduced step or the implicit method" : "");
     recoveries_reported_ = recoveries_;
   } else if (!strain_warning_.empty()) {
     stat.summary(DiagnosticStatus::WARN, strain_warning_);
@@ -403,8 +426,12 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   if (!robot_.empty())
     stat.addf("robot collision elements (in tf / all)", "%d / %d", robot_.active(),
               robot_.elements());
-  stat.add("recoveries from an invalid state", recoveries_);
-  stat.add("last invalid state", last_problem_);
+  stat.add("stability guard detections", recoveries_);
+  stat.add("stability guard last event", last_problem_);
+  stat.add("stability guard state", guard_.failed()    ? "stopped (unrecoverable)"
+                                    : guard_.reduced() ? "recovering (reduced step or method)"
+                                                       : "ok");
+  stat.add("stability guard time step (s)", guard_.time_step());
 }
 
 // A line a user watching the console (make run) can follow without rqt or rostopic.

@@ -107,7 +107,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
     const std::string e = add_grasp(spec, source, frame, /*from_scene=*/true, &segment);
     if (!e.empty()) ROS_WARN("corde_sim: scene grasp not made: %s", e.c_str());
   }
-  take_snapshot();
+  guard_note_ = restart_guard();
   refresh_layout();
   return "";
 }

@@ -9,7 +9,26 @@
 
 namespace corde_sim {
 
+std::string SimNode::stopped_note() const {
+  return guard_.failed() ? "; the simulation is still stopped at its last good state (stability "
+                           "guard: " +
+                               last_problem_ + ")"
+                         : "";
+}
+
 bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
+  reset(req, res);
+  if (!res.success) res.message += stopped_note();
+  return true;
+}
+
+bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
+  configure(req, res);
+  if (!res.success) res.message += stopped_note();
+  return true;
+}
+
+void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   std::string path = scene_path_;
   if (!req.scene.empty()) {
     std::string error;
@@ -17,7 +36,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
     if (path.empty()) {
       res.success = false;
       res.message = "scene not loaded, state unchanged: " + error;
-      return true;
+      return;
     }
   }
   corde::Scene scene;
@@ -28,7 +47,7 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("scene not loaded, state unchanged: ") + e.what();
-    return true;
+    return;
   }
   // The new world starts at its own time 0; the node's clock continues from where it was.
   const double t = sim_time();
@@ -36,18 +55,19 @@ bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   if (!error.empty()) {
     res.success = false;
     res.message = "scene not used, state unchanged: " + error;
-    return true;
+    return;
   }
   time_offset_ = t;
   bump_time();
   pacer_.anchor(sim_time(), wall_seconds());
   res.success = true;
-  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s";
+  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s" + guard_note_;
+  guard_note_.clear();
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  return true;
+  return;
 }
 
-bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
+void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   ConfigurePlan plan;
   std::string error =
       plan_configure(world_, req.rod, req.keys, req.values, req.flags,
@@ -55,7 +75,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   if (!error.empty()) {
     res.success = false;
     res.message = error;
-    return true;
+    return;
   }
   // Work on copies; keep them only if everything succeeds.
   corde::World world = world_;
@@ -73,7 +93,7 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   } catch (const std::exception& e) {
     res.success = false;
     res.message = std::string("rejected, nothing changed: ") + e.what();
-    return true;
+    return;
   }
   double margin = 0.0;
   std::string limiting;
@@ -89,22 +109,22 @@ bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
     res.message = "rejected, nothing changed: time_step " + num(world.time_step) +
                   " s would exceed the stability limit of rod '" + limiting + "' (h/h_crit " +
                   num(margin) + "); give a smaller time_step in the same request";
-    return true;
+    return;
   }
   std::swap(world_, world);
   settings_ = settings;
   for (const std::string& rod : plan.resample)
     for (size_t i = 0; i < world_.rods().size(); ++i)
       if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
-  take_snapshot();
+  const std::string note = restart_guard();
   bump_time();
   refresh_layout();
   res.success = true;
   res.message = "configured " +
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
-                summary + "(h/h_crit " + num(stability_margin_) + ")";
+                summary + "(h/h_crit " + num(stability_margin_) + ")" + note;
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  return true;
+  return;
 }
 
 bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
@@ -131,13 +151,19 @@ bool SimNode::on_step(Step::Request& req, Step::Response& res) {
   }
   update_tf_holders();
   apply_inputs();
+  const int detections = recoveries_;
   run_steps(req.steps, std::numeric_limits<double>::infinity());
-  res.success = check_state();
+  res.success = settle_guard();
   if (res.success) check_holders_and_strain();
   res.time = sim_time();
-  res.message = res.success ? "stepped " + std::to_string(req.steps) + " step(s)"
-                            : "the state became invalid (" + last_problem_ +
-                                  "); restored the last good state";
+  res.message = !res.success ? "stopped at the last good state: the stability guard could not "
+                               "recover (" +
+                                   last_problem_ + "); ~reset or ~configure to resume"
+                : recoveries_ > detections
+                    ? "stepped " + std::to_string(req.steps) +
+                          " step(s); the stability guard rolled back and retried (" +
+                          last_problem_ + ")"
+                    : "stepped " + std::to_string(req.steps) + " step(s)";
   return true;
 }
 
@@ -215,6 +241,7 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
   res.message = "grasp '" + req.name + "' holds segment " + std::to_string(segment) + " of rod '" +
                 req.rod + "' (source " + to_string(source) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
+  guard_.mark_good(world_);  // a rollback goes back to the grasp, not to before it
   bump_time();
   refresh_layout();
   return true;
@@ -233,6 +260,7 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
   ROS_INFO("corde_sim: %s", res.message.c_str());
+  guard_.mark_good(world_);
   bump_time();
   refresh_layout();
   return true;

@@ -21,6 +21,10 @@
 // BM_GripperSweep (config/scenes/gripper_sweep.yaml, a link sweeping through a hanging cable at
 // 1 m/s: the whole run per iteration, its time per World::step and real-time factor).
 //
+// BM_GuardOverhead/guard: the stability guard's cost on config/scenes/default.yaml (40 elements,
+// its gripper held), 0.2 s per iteration of bare World::step (0) or through the guard (1):
+// us_per_step (thread CPU time), for the ratio in the same run.
+//
 // Columns: Time and CPU per step (us); ns_per_element = time per step / N. Typical use:
 //   corde_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //   corde_bench --benchmark_filter=BM_RodStep/100
@@ -46,6 +50,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <memory>
 #include <random>
 #include <sstream>
@@ -65,6 +70,7 @@
 #include "corde_sim/scene_statics.h"
 #include "corde_sim/stability.h"
 #include "corde_sim/statics.h"
+#include "corde_sim/step_guard.h"
 #include "corde_sim/world.h"
 
 namespace {
@@ -816,3 +822,47 @@ BENCHMARK(BM_DynamicRelaxation)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::
 }  // namespace
 
 BENCHMARK_MAIN();
+
+// The stability guard's overhead (step_guard.h): a check, an energy evaluation and a copy of the
+// world per 64 steps, plus the per-step work bound, on the default scene with its gripper held:
+// 0.2 s (3053 steps) per iteration of bare World::step (0) or StepGuard::step (1).
+void BM_GuardOverhead(benchmark::State& state) {
+  const bool guarded = state.range(0) != 0;
+  corde::Scene base;
+  try {
+    base = corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/default.yaml");
+    for (const corde::GraspSpec& spec : base.grasps) {
+      corde::Rod& rod = base.world.rod(spec.rod);
+      const Eigen::Isometry3d holder = corde::segment_pose(rod, corde::grasp_segment(rod, spec));
+      corde::hold(rod, corde::make_grasp(rod, spec, holder), holder);
+    }
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const long steps = std::lround(0.2 / base.world.time_step);
+  long total = 0;
+  double seconds = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    corde::World world = base.world;
+    corde::StepGuard guard;
+    guard.reset(world);
+    state.ResumeTiming();
+    // Thread CPU time: the machine's other load does not enter the ratio.
+    timespec c0, c1;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
+    if (guarded) {
+      if (!guard.step(&world, steps) || !guard.settle(&world) || !guard.events().empty())
+        state.SkipWithError("the guard reported an event");
+    } else {
+      world.step(steps);
+    }
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+    total += steps;
+    seconds += (c1.tv_sec - c0.tv_sec) + 1e-9 * (c1.tv_nsec - c0.tv_nsec);
+  }
+  state.counters["us_per_step"] = total > 0 ? 1e6 * seconds / static_cast<double>(total) : 0.0;
+}
+
+BENCHMARK(BM_GuardOverhead)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);

@@ -22,7 +22,7 @@ const char* kUsage =
     "                 [--out FILE.csv] [--reactions FILE.csv] [--energies FILE.csv]\n"
     "                 [--every K] [--max-speed V] [--max-strain E]\n"
     "                 [--max-energy J] [--max-steps N] [--statics [--at T]] [--dynamics]\n"
-    "                 [--quiet]\n"
+    "                 [--no-guard] [--quiet]\n"
     "  --duration S   simulated time (s), overrides the scene's duration\n"
     "  --dt H         time step (s), overrides the scene's time_step\n"
     "  --set K=V      override a scene key, e.g. --set rods.0.elements=100 (repeatable)\n"
@@ -44,9 +44,14 @@ const char* kUsage =
     "  --at T         statics with the drives and grasps at time T s (scene key\n"
     "                 statics_time; default 0)\n"
     "  --dynamics     run the scene even if it says mode: statics\n"
+    "  --no-guard     run without the stability guard (which checks the state every 64\n"
+    "                 steps, rolls back and retries with a smaller step or the implicit\n"
+    "                 method; docs/stability_guard.md), e.g. to benchmark the bare steps\n"
     "  --quiet        print only errors\n"
-    "exit status: 0 done; 1 bad scene, or one statics cannot handle; 2 bad arguments;\n"
-    "3 the run blew up; 4 statics found no equilibrium\n";
+    "exit status: 0 done (the guard may have recovered: see stderr and the summary),\n"
+    "  1 bad scene or file, or one statics cannot handle, 2 bad usage, 3 the run blew up\n"
+    "  (runaway checks, --no-guard), 4 statics found no equilibrium, 5 the guard could not\n"
+    "  recover (the run stopped at the last good state)\n";
 
 int usage_error(const std::string& msg) {
   std::fprintf(stderr, "corde_run: %s\n%s", msg.c_str(), kUsage);
@@ -126,6 +131,8 @@ int main(int argc, char** argv) {
         return usage_error("--at needs a non-negative time in s, got '" + v + "'");
       overrides.push_back("statics_time=" + v);
       at_given = true;
+    } else if (a == "--no-guard") {
+      options.guard.enabled = false;
     } else if (a == "--max-speed" || a == "--max-strain" || a == "--max-energy" ||
                a == "--max-steps") {
       if (!value(&v)) return usage_error(a + " needs a value");
@@ -217,6 +224,14 @@ int main(int argc, char** argv) {
       progress_shown = true;
     };
   }
+  // Guard events as they happen; with --quiet only the unrecoverable one (an error).
+  options.on_guard_event = [&](const corde::GuardEvent& e) {
+    const bool fatal = e.kind == corde::GuardEvent::Kind::kUnrecoverable;
+    if (quiet && !fatal) return;
+    if (progress_shown) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "corde_run: guard: %s%s\n", fatal ? "UNRECOVERABLE: " : "",
+                 e.message().c_str());
+  };
   corde::RunResult result;
   try {
     result = corde::run_scene(&scene, options);
@@ -240,6 +255,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "corde_run: error writing '%s' (disk full?)%s\n", failed_path.c_str(),
                  result.write_failed ? "; the run stopped there" : "");
     return 1;
+  }
+  if (!result.ok && result.guard_failed) {
+    std::fprintf(stderr,
+                 "corde_run: the stability guard could not recover (every retry failed); the run "
+                 "stopped at its last good state, t = %.6g s%s\n",
+                 result.failed_time,
+                 out_path.empty() && reactions_path.empty() && energies_path.empty()
+                     ? ""
+                     : "; the CSV files end with the last frame before it");
+    return 5;
   }
   if (!result.ok) {
     std::fprintf(stderr,

@@ -135,9 +135,11 @@ class BadInputs(unittest.TestCase):
         self.assertFalse(self.sim.reset("/no/such/scene.yaml").success)
         self.assertTrue(ct.finite_state(self.sim.fresh_state()))
 
-    def test_4_blow_up_is_recovered(self):
-        # A finite but absurd force makes the state non-finite within steps: the node restores
-        # the last good state, says so in the diagnostics, and never publishes a NaN.
+    def test_4_blow_up_is_held_and_reset_resumes(self):
+        # A finite but absurd force blows the state up within steps, and keeps doing so through
+        # every retry of the stability guard (half steps, the implicit method): the node stops at
+        # its last good state, keeps publishing it (never a NaN), says so in the diagnostics
+        # (ERROR), and a reset resumes it, saying that it had stopped.
         self.assertTrue(self.sim.reset().success)
         self.assertTrue(self.sim.release("gripper").success)
         since = time.monotonic()
@@ -151,13 +153,29 @@ class BadInputs(unittest.TestCase):
         for m in self.sim.tf.messages(since):
             self.assertTrue(ct.finite_tf(m))
         errors = [st for m in self.diag.messages(since) for st in m.status
-                  if st.level == 2 and "non-finite" in st.message]
-        self.assertTrue(errors, "no ERROR diagnostic about the non-finite state")
+                  if st.level == 2 and "stability guard could not recover" in st.message]
+        self.assertTrue(errors, "no ERROR diagnostic about the unrecoverable state")
         s = self.sim.fresh_state()
         self.assertFalse(s.paused)
-        # Back to a sane rope hanging from its clamp.
+        # The last good state: a sane rope hanging from its clamp, held while the clock goes on.
         for p in s.rods[0].nodes:
             self.assertLess(np.linalg.norm(ct.vec(p) - np.array([0, 0, 1])), 0.6)
+        later = self.sim.fresh_state()
+        self.assertGreater(later.sim_time, s.sim_time)
+        self.assertEqual([ct.vec(p).tolist() for p in later.rods[0].nodes],
+                         [ct.vec(p).tolist() for p in s.rods[0].nodes])
+        r = self.sim.reset()
+        self.assertTrue(r.success)
+        self.assertIn("had stopped", r.message)
+        since = time.monotonic()
+        time.sleep(0.5)
+        moved = self.sim.fresh_state()
+        self.assertNotEqual([ct.vec(p).tolist() for p in moved.rods[0].nodes],
+                            [ct.vec(p).tolist() for p in later.rods[0].nodes])
+        time.sleep(1.2)  # a diagnostics report after the reset (diagnostic_period 1 s)
+        latest = self.diag.messages(since)[-1]
+        for st in latest.status:
+            self.assertNotIn("stopped at the last good state", st.message)
 
 
 if __name__ == "__main__":

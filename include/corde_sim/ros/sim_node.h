@@ -42,7 +42,7 @@
 #include "corde_sim/ros/pacer.h"
 #include "corde_sim/ros/robot_obstacles.h"
 #include "corde_sim/scene.h"
-#include "corde_sim/validity.h"
+#include "corde_sim/step_guard.h"
 
 namespace corde_sim {
 
@@ -67,13 +67,6 @@ struct GraspWiring {
   Eigen::Isometry3d script_offset_inv = Eigen::Isometry3d::Identity();
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
   ros::Publisher reaction_pub;
-};
-
-// What the node falls back on when the state turns invalid: the world and the grasps' holders as
-// they were at a state that passed the validity check.
-struct Snapshot {
-  corde::World world;
-  corde::GraspSet grasps;
 };
 
 class SimNode {
@@ -129,6 +122,10 @@ class SimNode {
   // Services.
   bool on_reset(Reset::Request& req, Reset::Response& res);
   bool on_configure(Configure::Request& req, Configure::Response& res);
+  void reset(Reset::Request& req, Reset::Response& res);
+  void configure(Configure::Request& req, Configure::Response& res);
+  // "" or, while the guard has given up, what a refused ~reset or ~configure adds to its reply.
+  std::string stopped_note() const;
   bool on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool on_step(Step::Request& req, Step::Response& res);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
@@ -138,10 +135,16 @@ class SimNode {
 
   // Loop and outputs.
   void advance(double now);
-  // Validity check after steps: restores the last good snapshot when the state is not valid.
-  // Returns false if it restored.
-  bool check_state();
-  void take_snapshot();
+  // The stability guard (corde::StepGuard) checks the state after each batch of steps (and every
+  // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
+  // returns false while it has given up (the world then stays at its last good state).
+  bool settle_guard();
+  void report_guard_events();
+  // A new world (start-up, reset, configure): the guard starts over from it. Returns what to add
+  // to the service's message when the guard had given up before ("" otherwise).
+  std::string restart_guard();
+  // One step of world_.time_step with the node's inputs (scripted and held grasps, robot links).
+  void step_once(corde::World* world);
   void publish_due(double now);
   void publish_reactions();
   void publish_tf();
@@ -168,8 +171,9 @@ class SimNode {
   std::map<std::string, GraspWiring> wiring_;
   std::vector<std::pair<const std::string*, const GraspWiring*>> scripted_;  // run_steps' list
   InputQueue inputs_;
-  Snapshot last_good_;  // taken at publishes of a valid state; restored if it turns invalid
-  corde::ValidityLimits validity_;
+  corde::StepGuard guard_;
+  corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
+  corde::StepGuard::StepFn step_fn_;
   SimSettings settings_;
   int next_marker_id_ = 0;
 
@@ -189,10 +193,11 @@ class SimNode {
   double sim_at_stats_ = 0.0, wall_at_stats_ = 0.0;
   double step_time_us_ = 0.0, measured_rtf_ = 0.0;
   bool lagging_ = false, rtf_initialised_ = false;
-  int recoveries_ = 0, recoveries_reported_ = 0;
-  std::vector<double> recovery_walls_;  // wall times of recent recoveries
-  std::string last_problem_;            // why the state was last found invalid
-  std::string strain_warning_;          // rod strained beyond its max_strain (for diagnostics)
+  int recoveries_ = 0, recoveries_reported_ = 0;  // guard detections (all recovered or not)
+  long guard_events_seen_ = 0;
+  std::string last_problem_;    // the guard's last event
+  std::string guard_note_;      // restart_guard()'s note from install_scene, for ~reset's reply
+  std::string strain_warning_;  // rod strained beyond its max_strain (for diagnostics)
   double last_clock_ = -1.0, last_tf_time_ = -1.0;
 
   // Output deadlines (steady-clock seconds).

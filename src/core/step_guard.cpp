@@ -1,0 +1,466 @@
+#include "corde_sim/step_guard.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <type_traits>
+
+#include "corde_sim/stability.h"
+
+namespace corde {
+namespace {
+
+// Integrator::kImplicitEuler where World::step runs it, found at compile time so that the guard
+// builds (without the implicit fallback) against a library that does not have it yet.
+template <class E, class = void>
+struct ImplicitOf {
+  static constexpr bool kAvailable = false;
+  static constexpr E kValue = E::kSemiImplicitEuler;
+};
+template <class E>
+struct ImplicitOf<E, std::void_t<decltype(E::kImplicitEuler)>> {
+  static constexpr bool kAvailable = true;
+  static constexpr E kValue = E::kImplicitEuler;
+};
+constexpr bool kHaveImplicit = ImplicitOf<Integrator>::kAvailable;
+constexpr Integrator kImplicit = ImplicitOf<Integrator>::kValue;
+
+const char* method_name(Integrator i) {
+  if (i == Integrator::kSemiImplicitEuler) return "semi_implicit_euler";
+  if (i == Integrator::kSplitRotation) return "split_rotation";
+  return "implicit_euler";
+}
+
+std::string fmt(const char* f, double a, double b) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, f, a, b);
+  return buf;
+}
+
+GuardProblem problem(GuardEvent::Kind kind, const Rod& rod, int item, std::string detail) {
+  GuardProblem p;
+  p.found = true;
+  p.kind = kind;
+  p.rod = rod.name();
+  p.item = item;
+  p.detail = std::move(detail);
+  return p;
+}
+
+const char* action_text(GuardEvent::Action a) {
+  switch (a) {
+    case GuardEvent::Action::kHalveStep:
+      return "retrying with half the step";
+    case GuardEvent::Action::kImplicit:
+      return "retrying with the implicit method";
+    case GuardEvent::Action::kGiveUp:
+      return "no retry left: the world stays at its last good state";
+    case GuardEvent::Action::kRestore:
+      return "trying the user's step and method again";
+    case GuardEvent::Action::kNone:
+      break;
+  }
+  return "";
+}
+
+// Angle (rad) of the rotation between two unit quaternions.
+double angle_between(const Quat& a, const Quat& b) {
+  const double c = std::min(1.0, std::abs(a.coeffs().dot(b.coeffs())));
+  return 2.0 * std::acos(c);
+}
+
+}  // namespace
+
+bool guard_has_implicit() { return kHaveImplicit; }
+
+const char* guard_event_kind_name(GuardEvent::Kind kind) {
+  switch (kind) {
+    case GuardEvent::Kind::kNonFinite:
+      return "non-finite";
+    case GuardEvent::Kind::kSpeed:
+      return "speed";
+    case GuardEvent::Kind::kStretch:
+      return "stretch";
+    case GuardEvent::Kind::kShear:
+      return "shear";
+    case GuardEvent::Kind::kBend:
+      return "bend";
+    case GuardEvent::Kind::kEnergy:
+      return "energy";
+    case GuardEvent::Kind::kRestored:
+      return "restored";
+    case GuardEvent::Kind::kUnrecoverable:
+      return "unrecoverable";
+  }
+  return "?";
+}
+
+std::string GuardEvent::message() const {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "t = %.6g s: ", time);
+  std::string m = buf;
+  if (kind == Kind::kRestored) {
+    std::snprintf(buf, sizeof buf, "%s: time step %.3g s (%s)", action_text(action), time_step,
+                  method_name(integrator));
+    return m + buf;
+  }
+  m += guard_event_kind_name(kind);
+  if (!rod.empty()) m += ", rod '" + rod + "'";
+  m += ": " + detail;
+  if (action == Action::kNone) return m;
+  std::snprintf(buf, sizeof buf, "; rolled back to t = %.6g s, ", rollback_to);
+  m += buf;
+  m += action_text(action);
+  if (action == Action::kHalveStep || action == Action::kImplicit) {
+    std::snprintf(buf, sizeof buf, " (time step %.3g s, %s)", time_step, method_name(integrator));
+    m += buf;
+  }
+  return m;
+}
+
+GuardProblem check_state(const World& world, const GuardSettings& s) {
+  using K = GuardEvent::Kind;
+  const bool shear = s.max_shear_angle > 0.0 && s.max_shear_angle < M_PI;
+  const double cos_shear = std::cos(s.max_shear_angle);
+  // An element turned by theta from its rest shape has |u - uhat| l = 2 sin(theta / 2).
+  const bool bend = s.max_bend_angle > 0.0 && s.max_bend_angle < M_PI;
+  const double max_turn = 2.0 * std::sin(0.5 * s.max_bend_angle);
+  for (const Rod& rod : world.rods()) {
+    const auto& x = rod.positions();
+    const auto& v = rod.velocities();
+    const auto& q = rod.orientations();
+    const auto& w = rod.angular_velocities();
+    for (int i = 0; i < rod.num_nodes(); ++i) {
+      if (!x[i].allFinite() || !v[i].allFinite())
+        return problem(K::kNonFinite, rod, i, "node " + std::to_string(i) + " is not finite");
+      const double speed = v[i].norm();
+      if (speed > s.max_speed)
+        return problem(K::kSpeed, rod, i,
+                       "node " + std::to_string(i) +
+                           fmt(" moves at %.3g m/s (limit %.3g)", speed, s.max_speed));
+    }
+    for (int k = 0; k < rod.num_segments(); ++k) {
+      if (!q[k].coeffs().allFinite() || !w[k].allFinite())
+        return problem(K::kNonFinite, rod, k, "segment " + std::to_string(k) + " is not finite");
+      const double spin = w[k].norm();
+      if (spin > s.max_angular_speed)
+        return problem(K::kSpeed, rod, k,
+                       "segment " + std::to_string(k) +
+                           fmt(" spins at %.3g rad/s (limit %.3g)", spin, s.max_angular_speed));
+    }
+    const auto& rest = rod.rest_lengths();
+    for (int k = 0; k < rod.num_segments(); ++k) {
+      const Vec3 d = x[k + 1] - x[k];
+      const double len = d.norm();
+      const double e = len / rest[k] - 1.0;
+      if ((s.max_stretch > 0.0 && e > s.max_stretch) ||
+          (s.max_compression > 0.0 && -e > s.max_compression))
+        return problem(
+            K::kStretch, rod, k,
+            "segment " + std::to_string(k) +
+                (e > 0 ? fmt(" stretched by %.3g (limit %.3g)", e, s.max_stretch)
+                       : fmt(" compressed by %.3g (limit %.3g)", -e, s.max_compression)));
+      if (!shear) continue;
+      const double c = len > 0.0 ? d.dot(director3(q[k])) / len : -1.0;
+      if (c < cos_shear)
+        return problem(K::kShear, rod, k,
+                       "segment " + std::to_string(k) +
+                           fmt(" frame %.3g rad off its tangent (limit %.3g)",
+                               std::acos(std::max(-1.0, std::min(1.0, c))), s.max_shear_angle));
+    }
+    const auto& uhat = rod.rest_strains();
+    for (int j = 0; bend && j + 1 < rod.num_segments(); ++j) {
+      const double l = 0.5 * (rest[j] + rest[j + 1]);
+      const double turn = (darboux(q[j], q[j + 1], l) - uhat[j]).norm() * l;
+      if (turn > max_turn)
+        return problem(K::kBend, rod, j,
+                       "element " + std::to_string(j) +
+                           fmt(" turned %.3g rad from its rest shape (limit %.3g)",
+                               2.0 * std::asin(std::min(1.0, 0.5 * turn)), s.max_bend_angle));
+    }
+  }
+  return GuardProblem();
+}
+
+void StepGuard::reset(const World& world) {
+  user_h_ = h_ = world.time_step;
+  user_integrator_ = integrator_ = world.integrator;
+  halvings_ = 0;
+  failed_ = false;
+  trial_ = false;
+  relax_after_ = settings_.relax_after;
+  good_since_ = world.time();
+  detections_ = rollbacks_ = 0;
+  mgl_ = 0.0;
+  const double g = std::max(world.gravity.norm(), 1.0);
+  for (const Rod& rod : world.rods()) {
+    double m = 0.0, len = 0.0;
+    for (double mi : rod.node_masses()) m += mi;
+    for (double l : rod.rest_lengths()) len += l;
+    mgl_ += m * g * len;
+  }
+  snapshot(world);
+}
+
+void StepGuard::sync_user_settings(const World& world) {
+  if (world.time_step == user_h_ && world.integrator == user_integrator_) return;
+  user_h_ = h_ = world.time_step;
+  user_integrator_ = integrator_ = world.integrator;
+  halvings_ = 0;
+  trial_ = false;
+}
+
+void StepGuard::snapshot(const World& world, const WorldEnergies* energies) {
+  world.copy_to(&snap_);
+  have_snap_ = true;
+  const WorldEnergies e = energies ? *energies : world.energies();
+  snap_energy_ = e.kinetic() + e.elastic() + e.total.gravity;
+  snap_scale_ = e.kinetic() + e.elastic();
+  work_ = 0.0;
+  since_snap_ = 0;
+  since_check_ = 0;
+  if (save_) save_();
+}
+
+void StepGuard::rollback(World* world) {
+  snap_.copy_to(world);
+  if (restore_) restore_();
+  work_ = 0.0;
+  since_snap_ = 0;
+  since_check_ = 0;
+  ++rollbacks_;
+}
+
+GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const {
+  GuardProblem p = check_state(world, settings_);
+  if (p.found) return p;
+  const WorldEnergies e = world.energies();
+  *energies = e;
+  if (settings_.energy_tolerance <= 0.0) return p;
+  const double rise = e.kinetic() + e.elastic() + e.total.gravity - snap_energy_;
+  const double allowed =
+      work_ + settings_.energy_tolerance * snap_scale_ + settings_.energy_floor * mgl_ + 1e-12;
+  if (rise > allowed) {
+    p.found = true;
+    p.kind = GuardEvent::Kind::kEnergy;
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "the energy rose by %.3g J since the last check; work done at most %.3g J, "
+                  "allowed %.3g J",
+                  rise, work_, allowed);
+    p.detail = buf;
+    // Name the rod with the most kinetic and elastic energy per mass: the one running away.
+    double worst = -1.0;
+    for (const Rod& rod : world.rods()) {
+      double m = 0.0;
+      for (double mi : rod.node_masses()) m += mi;
+      const Energies r = rod.energies(world.gravity);
+      const double specific = (r.kinetic() + r.elastic()) / m;
+      if (specific > worst) {
+        worst = specific;
+        p.rod = rod.name();
+      }
+    }
+  }
+  return p;
+}
+
+// A bound on the work done on the rods over the last step of length h: sum of |power| h over
+// every source that is not in the energy itself (gravity is; internal friction, drag and contact
+// friction only take energy out).
+void StepGuard::add_step_work(const World& world, double h) {
+  double w = 0.0;
+  const double t1 = world.time(), t0 = t1 - h;
+  for (const Rod& rod : world.rods()) {
+    const auto& v = rod.velocities();
+    const auto& q = rod.orientations();
+    const auto& om = rod.angular_velocities();
+    for (const NodeDrive& d : rod.node_drives()) w += std::abs(d.reaction.dot(v[d.node])) * h;
+    for (const SegmentDrive& d : rod.segment_drives())
+      w += std::abs(d.reaction.dot(q[d.segment] * om[d.segment])) * h;
+    for (const GhostFrame* g : {&rod.ghost_start(), &rod.ghost_end()})
+      if (g->active && g->motion)
+        w += g->reaction.norm() * angle_between(ghost_frame_at(*g, t0), ghost_frame_at(*g, t1));
+    for (const Load& l : rod.loads()) {
+      const double f = l.value.norm() * l.scale(t1);
+      if (f == 0.0) continue;
+      if (l.kind == Load::Kind::kForce)
+        w += f * v[l.index].norm() * h;
+      else
+        w += f * om[l.index].norm() * h;
+    }
+    if (rod.has_external()) {
+      const auto& ef = rod.external_forces();
+      const auto& et = rod.external_torques();
+      for (size_t i = 0; i < ef.size(); ++i) w += ef[i].norm() * v[i].norm() * h;
+      for (size_t k = 0; k < et.size(); ++k) w += et[k].norm() * om[k].norm() * h;
+    }
+  }
+  // Contacts: a moving obstacle's surface works on the rod, and the push-out that removes a
+  // penetration separates the surfaces faster than they met.
+  if (const ContactSystem* c = world.contacts()) {
+    const ContactSettings& cs = world.contact;
+    for (const Contact& k : c->contacts()) {
+      if (k.pn == 0.0 && k.pt.isZero()) continue;
+      const double push = std::min(cs.max_push_speed, cs.push_out * std::max(0.0, -k.gap) / h);
+      w += (k.pn * k.normal + k.pt).norm() * (k.surface_velocity.norm() + push);
+    }
+  }
+  work_ += w;
+}
+
+void StepGuard::push_event(const GuardEvent& e) {
+  if (events_.size() >= 1000) events_.erase(events_.begin());
+  events_.push_back(e);
+  ++events_total_;
+}
+
+bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail) {
+  GuardEvent e;
+  e.time = t_fail;
+  e.kind = p.kind;
+  e.rod = p.rod;
+  e.item = p.item;
+  e.detail = p.detail;
+  e.rollback_to = world.time();
+  const bool threw = p.detail.rfind("the step threw", 0) == 0;
+  const bool explicit_method = !kHaveImplicit || integrator_ != kImplicit;
+  const bool allow_implicit = settings_.allow_implicit && kHaveImplicit;
+  if (trial_) {
+    // The user's setting failed again: back to the one that worked, and wait longer next time.
+    trial_ = false;
+    h_ = saved_h_;
+    integrator_ = saved_integrator_;
+    halvings_ = saved_halvings_;
+    relax_after_ *= 2.0;
+    e.action = kHaveImplicit && integrator_ == kImplicit && explicit_method
+                   ? GuardEvent::Action::kImplicit
+                   : GuardEvent::Action::kHalveStep;
+  } else {
+    bool halve = !threw && halvings_ < settings_.max_halvings;
+    if (halve && explicit_method && allow_implicit) {
+      // Halving cannot help when even the last allowed halving stays above the explicit limit.
+      double limit = 1e300;
+      for (const Rod& rod : world.rods()) limit = std::min(limit, critical_time_step(rod));
+      if (user_h_ / std::ldexp(1.0, settings_.max_halvings) > limit) halve = false;
+    }
+    if (halve) {
+      ++halvings_;
+      h_ = user_h_ / std::ldexp(1.0, halvings_);
+      e.action = GuardEvent::Action::kHalveStep;
+    } else if (explicit_method && allow_implicit) {
+      integrator_ = kImplicit;
+      halvings_ = 0;
+      h_ = user_h_;
+      e.action = GuardEvent::Action::kImplicit;
+    } else {
+      e.action = GuardEvent::Action::kGiveUp;
+    }
+  }
+  e.time_step = h_;
+  e.integrator = integrator_;
+  good_since_ = world.time();
+  push_event(e);
+  if (e.action != GuardEvent::Action::kGiveUp) return true;
+  GuardEvent u = e;
+  u.kind = GuardEvent::Kind::kUnrecoverable;
+  push_event(u);
+  return false;
+}
+
+bool StepGuard::step(World* world, long n, const StepFn& fn) {
+  return advance(world, n, false, fn);
+}
+
+bool StepGuard::settle(World* world, const StepFn& fn) { return advance(world, 0, true, fn); }
+
+bool StepGuard::advance(World* world, long n, bool check_at_end, const StepFn& fn) {
+  if (!settings_.enabled) {
+    for (long i = 0; i < n; ++i) fn ? fn(world) : world->step();
+    return true;
+  }
+  if (!have_snap_) reset(*world);
+  if (failed_) return false;
+  sync_user_settings(*world);
+  // The world runs the guard's setting inside and shows the user's outside.
+  apply(world);
+  const bool ok = run(world, n, check_at_end, fn);
+  world->time_step = user_h_;
+  world->integrator = user_integrator_;
+  return ok;
+}
+
+bool StepGuard::run(World* world, long n, bool check_at_end, const StepFn& fn) {
+  long goal = since_snap_ + n;  // user steps from the snapshot
+  const int every = std::max(1, settings_.check_every);
+  for (;;) {
+    std::string threw;
+    if (since_snap_ < goal) {
+      const long sub = 1L << halvings_;
+      for (long i = 0; i < sub && threw.empty(); ++i) {
+        try {
+          fn ? fn(world) : world->step();
+        } catch (const std::exception& ex) {
+          threw = ex.what();
+        }
+        add_step_work(*world, h_);
+        ++since_check_;
+      }
+      ++since_snap_;
+      const bool due =
+          !threw.empty() || since_check_ >= every || (check_at_end && since_snap_ == goal);
+      if (!due) continue;
+    } else if (!check_at_end || since_check_ == 0) {
+      return true;
+    }
+    GuardProblem p;
+    WorldEnergies energies;
+    if (!threw.empty()) {
+      p.found = true;
+      p.kind = GuardEvent::Kind::kNonFinite;
+      p.detail = "the step threw: " + threw;
+    } else {
+      p = check(*world, &energies);
+    }
+    if (!p.found) {
+      goal -= since_snap_;
+      snapshot(*world, &energies);
+      const double t = world->time();
+      if (trial_ && t - good_since_ >= relax_after_) {
+        trial_ = false;  // the user's setting holds again
+        relax_after_ = settings_.relax_after;
+      } else if (!trial_ && reduced() && t - good_since_ >= relax_after_) {
+        saved_h_ = h_;
+        saved_integrator_ = integrator_;
+        saved_halvings_ = halvings_;
+        h_ = user_h_;
+        integrator_ = user_integrator_;
+        halvings_ = 0;
+        trial_ = true;
+        good_since_ = t;
+        GuardEvent e;
+        e.kind = GuardEvent::Kind::kRestored;
+        e.action = GuardEvent::Action::kRestore;
+        e.time = e.rollback_to = t;
+        e.time_step = h_;
+        e.integrator = integrator_;
+        push_event(e);
+        apply(world);
+      }
+      if (goal == 0) return true;
+      continue;
+    }
+    ++detections_;
+    const double t_fail = world->time();
+    rollback(world);
+    const bool ok = reduce(*world, p, t_fail);
+    apply(world);
+    if (!ok) {
+      failed_ = true;
+      return false;
+    }
+  }
+}
+
+}  // namespace corde
