@@ -38,6 +38,9 @@ struct Scene {
   std::string name, description, source;
   // Problems that do not stop a run, e.g. a time step above the estimated stability limit.
   std::vector<std::string> warnings;
+  // Choices the loader made for the scene and why (elements: auto, integrator: auto, time_step:
+  // auto), one line each, for corde_run's summary and the node's log.
+  std::vector<std::string> notes;
 };
 
 // Parses and validates a scene. `overrides` are "key.path=value" strings (e.g.

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "corde_sim/stability.h"
+#include "scene_elements.h"
 #include "scene_reader.h"
 
 namespace corde {
@@ -456,7 +457,13 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
   if (!root.IsDefined() || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   const std::vector<std::string> set = scene_detail::apply_overrides(&root, overrides);
   try {
-    return build_scene(root, source);
+    std::vector<std::string> notes;
+    if (scene_detail::has_auto_elements(root))
+      notes = scene_detail::choose_elements(
+          &root, [&](const YAML::Node& tree) { return build_scene(tree, source); });
+    Scene scene = build_scene(root, source);
+    scene.notes.insert(scene.notes.begin(), notes.begin(), notes.end());
+    return scene;
   } catch (const SceneError& e) {
     // Values from overrides carry line numbers of their own one-line text: name the override.
     std::string msg = e.what();
@@ -491,6 +498,10 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
             ? Integrator::kSemiImplicitEuler
             : Integrator::kSplitRotation;
   if (auto v = top.find("duration")) scene.duration = v->positive();
+  if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
+    v->positive();
+    scene.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+  }
   std::optional<Value> step = top.find("time_step");
   bool step_given = false;
   if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {

@@ -212,6 +212,7 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   char buf[512];
   std::string out = "scene      " + scene.name + " (" + scene.source + ")\n";
   out += "rods       " + rods + "\n";
+  for (const std::string& note : scene.notes) out += "chosen     " + note + "\n";
   for (const Rod& rod : scene.world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
     std::snprintf(buf, sizeof buf, "stability  %s: step limit %.3g s (%s), time step %.2f of it\n",
