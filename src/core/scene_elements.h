@@ -27,7 +27,8 @@ bool has_auto_elements(const YAML::Node& root);
 
 // Replaces every `elements: auto` in *root by a chosen count and removes `shape_tolerance`.
 // Each choice comes from probe runs of the scene at N/2 and N elements for the auto rods (same
-// step and integrator for both, over min(duration, 1 s)): their largest shape difference d at
+// step and integrator for both, over the scene's duration or as much of it as 1e7 element-steps
+// allow): their largest shape difference d at
 // equal material coordinates and equal times estimates the error at N as d / (2^p - 1), with the
 // order p that the validation suite measured (2; 1 where a segment is held or driven: natural
 // clamps, spin drives, orientation-holding grasps). The count is N (e / tol)^(1/p), probed again
