@@ -18,8 +18,14 @@ namespace corde {
 // kSplitRotation: a kick by the torques alone, w += h I^-1 tau, then the torque-free rotation of
 // the axisymmetric segment over h in Cayley form (docs/model.md, "Time integration"): it keeps a
 // free segment's kinetic energy and world angular momentum to round-off and the step symplectic.
-enum class Integrator { kSemiImplicitEuler, kSplitRotation };
+// kImplicitEuler: backward Euler of nodes and rotations together (implicit_step.h), stable at
+// steps far beyond the explicit limit; run by World::step (a Rod alone steps explicitly only).
+enum class Integrator { kSemiImplicitEuler, kSplitRotation, kImplicitEuler };
 constexpr Integrator kDefaultIntegrator = Integrator::kSplitRotation;
+// Scene and parameter names: "semi_implicit_euler", "split_rotation", "implicit_euler".
+const char* integrator_name(Integrator integrator);
+// False for an unknown name (integrator left unchanged).
+bool parse_integrator(const std::string& name, Integrator* integrator);
 
 struct Energies {
   double stretch = 0.0, bend_twist = 0.0, coupling = 0.0;  // elastic (J)

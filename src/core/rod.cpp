@@ -611,7 +611,38 @@ void Rod::compute_forces(double t, const Vec3& gravity) {
     forces_block(b0, std::min(b0 + kStepBlock, n), t, gravity);
 }
 
+const char* integrator_name(Integrator integrator) {
+  switch (integrator) {
+    case Integrator::kSemiImplicitEuler:
+      return "semi_implicit_euler";
+    case Integrator::kSplitRotation:
+      return "split_rotation";
+    case Integrator::kImplicitEuler:
+      return "implicit_euler";
+  }
+  return "unknown";
+}
+
+bool parse_integrator(const std::string& name, Integrator* integrator) {
+  for (Integrator i :
+       {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation, Integrator::kImplicitEuler})
+    if (name == integrator_name(i)) {
+      *integrator = i;
+      return true;
+    }
+  return false;
+}
+
+namespace {
+void require_explicit(const std::string& rod, Integrator integrator) {
+  if (integrator == Integrator::kImplicitEuler)
+    throw std::invalid_argument("rod '" + rod +
+                                "': the implicit integrator runs through World::step, not Rod::step");
+}
+}  // namespace
+
 void Rod::step(double t, double h, const Vec3& gravity, Integrator integrator) {
+  require_explicit(name_, integrator);
   const int n = num_segments();
   for (int b0 = 0; b0 < n; b0 += kStepBlock) {
     const int b1 = std::min(b0 + kStepBlock, n);
