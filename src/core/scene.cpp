@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "corde_sim/auto_step.h"
 #include "corde_sim/stability.h"
 #include "scene_elements.h"
 #include "scene_reader.h"
@@ -429,6 +430,24 @@ void check_time_step(Scene* scene, const Value* given) {
                               " s or time_step: auto");
 }
 
+// integrator: auto and time_step: auto for the implicit method (auto_step.h); the explicit
+// methods' step as check_time_step() has it.
+void choose_step(Scene* scene, const Value* given, bool integrator_auto) {
+  if (integrator_auto) {
+    const IntegratorChoice c = choose_integrator(*scene, given ? scene->world.time_step : 0.0);
+    scene->world.integrator = c.integrator;
+    scene->world.time_step = c.time_step;
+    scene->notes.push_back(c.reason);
+  } else if (scene->world.integrator == Integrator::kImplicitEuler && !given) {
+    const ImplicitStep s = implicit_time_step(*scene);
+    scene->world.time_step = s.time_step;
+    scene->notes.push_back("time_step: auto chose " + num(s.time_step) +
+                           " s for implicit_euler, set by " + s.why);
+  }
+  // The implicit method has no stability limit to check.
+  if (scene->world.integrator != Integrator::kImplicitEuler) check_time_step(scene, given);
+}
+
 std::string stem(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
@@ -492,11 +511,13 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   if (auto v = top.find("description")) scene.description = v->string();
   if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
   scene.world.integrator = kDefaultIntegrator;
-  if (auto v = top.find("integrator"))
-    scene.world.integrator =
-        v->choice({"semi_implicit_euler", "split_rotation"}) == "semi_implicit_euler"
-            ? Integrator::kSemiImplicitEuler
-            : Integrator::kSplitRotation;
+  bool integrator_auto = false;
+  if (auto v = top.find("integrator")) {
+    const std::string name =
+        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "auto"});
+    integrator_auto = name == "auto";
+    if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
+  }
   if (auto v = top.find("duration")) scene.duration = v->positive();
   if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
     v->positive();
@@ -540,7 +561,7 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     }
   }
   top.finish();
-  check_time_step(&scene, step_given ? &*step : nullptr);
+  choose_step(&scene, step_given ? &*step : nullptr, integrator_auto);
   return scene;
 }
 

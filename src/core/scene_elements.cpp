@@ -113,13 +113,7 @@ struct Probe {
   RunResult result;
 };
 
-bool is_explicit(Integrator i) {
-  return i == Integrator::kSemiImplicitEuler || i == Integrator::kSplitRotation;
-}
-
-std::string integrator_key(Integrator i) {
-  return i == Integrator::kSemiImplicitEuler ? "semi_implicit_euler" : "split_rotation";
-}
+bool is_explicit(Integrator i) { return i != Integrator::kImplicitEuler; }
 
 Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
                 const SceneBuilder& build, const Scene* like) {
@@ -127,7 +121,7 @@ Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
   for (const AutoRod& r : rods) tree["rods"][r.index]["elements"] = n;
   if (like) {  // the same step and method as the finer probe, so that only N differs
     tree["time_step"] = like->world.time_step;
-    tree["integrator"] = integrator_key(like->world.integrator);
+    tree["integrator"] = integrator_name(like->world.integrator);
   }
   Probe p{build(tree), {}, {}};
   // A given step the explicit method cannot take at the finer probe's resolution: its stable one.
