@@ -75,6 +75,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
       return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
   }
   for (const std::string& w : scene.warnings) ROS_WARN("corde_sim: scene: %s", w.c_str());
+  for (const std::string& n : scene.notes) ROS_INFO("corde_sim: scene: %s", n.c_str());
   grasps_.clear();
   // Topics of grasps the new scene has too stay subscribed (a reset does not make publishers
   // reconnect); the others end.
