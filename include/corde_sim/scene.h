@@ -47,6 +47,9 @@ struct Scene {
   // Rods started from their static equilibrium (`initial_state: equilibrium`), one line each:
   // residual, Newton iterations, load steps.
   std::vector<std::string> settled;
+  // Choices the loader made for the scene and why (elements: auto, integrator: auto, time_step:
+  // auto), one line each, for corde_run's summary and the node's log.
+  std::vector<std::string> notes;
 };
 
 // Parses and validates a scene. `overrides` are "key.path=value" strings (e.g.

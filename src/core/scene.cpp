@@ -11,7 +11,9 @@
 #include <sstream>
 
 #include "corde_sim/scene_statics.h"
+#include "corde_sim/auto_step.h"
 #include "corde_sim/stability.h"
+#include "scene_elements.h"
 #include "scene_reader.h"
 
 namespace corde {
@@ -447,6 +449,24 @@ void check_time_step(Scene* scene, const Value* given) {
                               " s or time_step: auto");
 }
 
+// integrator: auto and time_step: auto for the implicit method (auto_step.h); the explicit
+// methods' step as check_time_step() has it.
+void choose_step(Scene* scene, const Value* given, bool integrator_auto) {
+  if (integrator_auto) {
+    const IntegratorChoice c = choose_integrator(*scene, given ? scene->world.time_step : 0.0);
+    scene->world.integrator = c.integrator;
+    scene->world.time_step = c.time_step;
+    scene->notes.push_back(c.reason);
+  } else if (scene->world.integrator == Integrator::kImplicitEuler && !given) {
+    const ImplicitStep s = implicit_time_step(*scene);
+    scene->world.time_step = s.time_step;
+    scene->notes.push_back("time_step: auto chose " + num(s.time_step) +
+                           " s for implicit_euler, set by " + s.why);
+  }
+  // The implicit method has no stability limit to check.
+  if (scene->world.integrator != Integrator::kImplicitEuler) check_time_step(scene, given);
+}
+
 std::string stem(const std::string& path) {
   const size_t slash = path.find_last_of('/');
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
@@ -475,7 +495,13 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
   if (!root.IsDefined() || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   const std::vector<std::string> set = scene_detail::apply_overrides(&root, overrides);
   try {
-    return build_scene(root, source);
+    std::vector<std::string> notes;
+    if (scene_detail::has_auto_elements(root))
+      notes = scene_detail::choose_elements(
+          &root, [&](const YAML::Node& tree) { return build_scene(tree, source); });
+    Scene scene = build_scene(root, source);
+    scene.notes.insert(scene.notes.begin(), notes.begin(), notes.end());
+    return scene;
   } catch (const SceneError& e) {
     // Values from overrides carry line numbers of their own one-line text: name the override.
     std::string msg = e.what();
@@ -504,14 +530,22 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   if (auto v = top.find("description")) scene.description = v->string();
   if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
   scene.world.integrator = kDefaultIntegrator;
-  if (auto v = top.find("integrator"))
-    parse_integrator(v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler"}),
-                     &scene.world.integrator);
+  bool integrator_auto = false;
+  if (auto v = top.find("integrator")) {
+    const std::string name =
+        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "auto"});
+    integrator_auto = name == "auto";
+    if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
+  }
   if (auto v = top.find("duration")) scene.duration = v->positive();
   if (auto v = top.find("mode"))
     scene.mode = v->choice({"dynamics", "statics"}) == "statics" ? Scene::Mode::kStatics
                                                                  : Scene::Mode::kDynamics;
   if (auto v = top.find("statics_time")) scene.statics_time = v->non_negative();
+  if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
+    v->positive();
+    scene.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+  }
   std::optional<Value> step = top.find("time_step");
   bool step_given = false;
   if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {
@@ -574,7 +608,7 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
                                rod.name() + "' is unstable (" + std::to_string(e.negative_modes) +
                                " negative Hessian eigenvalues): the run will leave it");
   }
-  check_time_step(&scene, step_given ? &*step : nullptr);
+  choose_step(&scene, step_given ? &*step : nullptr, integrator_auto);
   return scene;
 }
 

@@ -249,15 +249,18 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   char buf[512];
   std::string out = "scene      " + scene.name + " (" + scene.source + ")\n";
   out += "rods       " + rods + "\n";
+  for (const std::string& note : scene.notes) out += "chosen     " + note + "\n";
+  const bool implicit = scene.world.integrator == Integrator::kImplicitEuler;
   for (const Rod& rod : scene.world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
-    std::snprintf(buf, sizeof buf, "stability  %s: step limit %.3g s (%s), time step %.2f of it\n",
+    std::snprintf(buf, sizeof buf,
+                  "stability  %s: step limit %.3g s (%s), time step %.2f of it%s\n",
                   rod.name().c_str(), e.time_step, e.limiting.c_str(),
-                  scene.world.time_step / e.time_step);
+                  scene.world.time_step / e.time_step, implicit ? " (explicit methods only)" : "");
     out += buf;
   }
-  std::snprintf(buf, sizeof buf, "steps      %ld of %.3g s, %.6g s simulated\n", r.steps,
-                scene.world.time_step, r.sim_time);
+  std::snprintf(buf, sizeof buf, "steps      %ld of %.3g s (%s), %.6g s simulated\n", r.steps,
+                scene.world.time_step, integrator_name(scene.world.integrator), r.sim_time);
   out += buf;
   const double per_step = r.steps > 0 ? r.wall_seconds / r.steps * 1e6 : 0.0;
   std::snprintf(buf, sizeof buf, "wall time  %.3f s, %.3g us/step, real-time factor %.3g\n",

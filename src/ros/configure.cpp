@@ -7,6 +7,7 @@
 
 #include "corde_sim/rod_edit.h"
 #include "corde_sim/ros/input_checks.h"
+#include "corde_sim/stability.h"
 
 namespace corde_sim {
 namespace {
@@ -68,6 +69,28 @@ const std::vector<std::string>& configure_flags() {
   return flags;
 }
 
+std::string integrator_names() {
+  std::string out;
+  for (corde::Integrator i : {corde::Integrator::kSemiImplicitEuler,
+                              corde::Integrator::kSplitRotation, corde::Integrator::kImplicitEuler})
+    out += (out.empty() ? "" : ", ") + std::string(corde::integrator_name(i));
+  return out;
+}
+
+double explicit_margin(const corde::World& world, std::string* limiting_rod) {
+  double margin = 0.0;
+  limiting_rod->clear();
+  if (world.integrator == corde::Integrator::kImplicitEuler) return 0.0;
+  for (const corde::Rod& rod : world.rods()) {
+    const double m = world.time_step / corde::critical_time_step(rod);
+    if (!(m <= margin)) {  // NaN wins: it is reported, not hidden
+      margin = m;
+      *limiting_rod = rod.name();
+    }
+  }
+  return margin;
+}
+
 SimSettings settings_from_world(const corde::World& world) {
   SimSettings s;
   s.gravity = world.gravity;
@@ -91,7 +114,8 @@ corde::Section effective_section(const RodSettings& s) {
 std::string plan_configure(const corde::World& world, const std::string& rod,
                            const std::vector<std::string>& keys, const std::vector<double>& values,
                            const std::vector<std::string>& flags,
-                           const std::vector<bool>& flag_values, ConfigurePlan* plan) {
+                           const std::vector<bool>& flag_values, const std::string& integrator,
+                           ConfigurePlan* plan) {
   *plan = ConfigurePlan();
   if (keys.size() != values.size())
     return "keys and values differ in length (" + std::to_string(keys.size()) + " vs " +
@@ -99,7 +123,13 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
   if (flags.size() != flag_values.size())
     return "flags and flag_values differ in length (" + std::to_string(flags.size()) + " vs " +
            std::to_string(flag_values.size()) + ")";
-  if (keys.empty() && flags.empty()) return "nothing to configure: no keys and no flags";
+  if (keys.empty() && flags.empty() && integrator.empty())
+    return "nothing to configure: no keys, no flags and no integrator";
+  if (!integrator.empty()) {
+    if (!corde::parse_integrator(integrator, &plan->integrator))
+      return "unknown integrator '" + integrator + "' (integrators: " + integrator_names() + ")";
+    plan->set_integrator = true;
+  }
   if (rod.empty()) {
     for (const corde::Rod& r : world.rods()) plan->rods.push_back(r.name());
   } else {
@@ -150,6 +180,10 @@ std::string apply_configure(const ConfigurePlan& plan, corde::World* world, SimS
   std::ostringstream summary;
   for (const auto& kv : v) summary << kv.first << "=" << kv.second << " ";
   for (const auto& kv : plan.flags) summary << kv.first << "=" << (kv.second ? "on" : "off") << " ";
+  if (plan.set_integrator) {
+    world->integrator = plan.integrator;
+    summary << "integrator=" << corde::integrator_name(plan.integrator) << " ";
+  }
 
   if (has("time_step")) world->time_step = v.at("time_step");
   if (has("gravity_x")) settings->gravity.x() = v.at("gravity_x");

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "corde_sim/rod.h"
+#include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_checks.h"
 
 namespace corde_sim {
@@ -143,6 +145,17 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
     } else {
       bad("overrides", "must be a list of \"key.path=value\" strings");
     }
+  }
+
+  // ~integrator: the scene's integrator key, as a last override (so a reset of the start-up
+  // file keeps it); "auto" lets the scene loader choose (docs/scene_format.md).
+  read<std::string>(pnh, "integrator", p.integrator, "");
+  if (!p.integrator.empty()) {
+    corde::Integrator parsed;
+    if (p.integrator != "auto" && !corde::parse_integrator(p.integrator, &parsed))
+      bad("integrator", "unknown integrator '" + p.integrator +
+                            "' (integrators: " + integrator_names() + ", auto)");
+    p.overrides.push_back("integrator=" + p.integrator);
   }
 
   read<std::string>(pnh, "world_frame", p.world_frame, "world");

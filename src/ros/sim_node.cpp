@@ -123,9 +123,12 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
 
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
   paused_ = params_.start_paused;
-  ROS_INFO("corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), time step %g s, h/h_crit %.3f%s",
-           initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(), world_.time_step,
-           stability_margin_, paused_ ? ", paused" : "");
+  ROS_INFO(
+      "corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), integrator %s, time step %g s, "
+      "h/h_crit %.3f%s",
+      initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(),
+      corde::integrator_name(world_.integrator), world_.time_step, stability_margin_,
+      paused_ ? ", paused" : "");
 }
 
 ros::Time SimNode::stamp() const {
@@ -140,17 +143,7 @@ void SimNode::bump_time() {
   time_offset_ += world_.time_step;
 }
 
-void SimNode::update_stability() {
-  stability_margin_ = 0.0;
-  limiting_rod_.clear();
-  for (const corde::Rod& rod : world_.rods()) {
-    const double m = world_.time_step / corde::critical_time_step(rod);
-    if (m > stability_margin_) {
-      stability_margin_ = m;
-      limiting_rod_ = rod.name();
-    }
-  }
-}
+void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &limiting_rod_); }
 
 void SimNode::step_once(corde::World* world) {
   const double h = world->time_step;  // the guard's, while it runs a halved step
@@ -408,6 +401,7 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   }
   stat.add("simulation time (s)", sim_time());
   stat.add("steps", steps_total_);
+  stat.add("integrator", corde::integrator_name(world_.integrator));
   stat.add("time step (s)", world_.time_step);
   stat.add("step time (us)", step_time_us_);
   stat.add("real-time factor (measured)", measured_rtf_);

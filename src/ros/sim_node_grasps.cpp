@@ -80,6 +80,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
     ROS_WARN(
         "corde_sim: scene: mode: statics is for corde_run; the node runs the scene (use "
         "initial_state: equilibrium to start it at rest in equilibrium)");
+  for (const std::string& n : scene.notes) ROS_INFO("corde_sim: scene: %s", n.c_str());
   grasps_.clear();
   // Topics of grasps the new scene has too stay subscribed (a reset does not make publishers
   // reconnect); the others end.

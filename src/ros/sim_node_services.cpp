@@ -69,9 +69,9 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
 
 void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   ConfigurePlan plan;
-  std::string error =
-      plan_configure(world_, req.rod, req.keys, req.values, req.flags,
-                     std::vector<bool>(req.flag_values.begin(), req.flag_values.end()), &plan);
+  std::string error = plan_configure(
+      world_, req.rod, req.keys, req.values, req.flags,
+      std::vector<bool>(req.flag_values.begin(), req.flag_values.end()), req.integrator, &plan);
   if (!error.empty()) {
     res.success = false;
     res.message = error;
@@ -95,20 +95,16 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
     res.message = std::string("rejected, nothing changed: ") + e.what();
     return;
   }
-  double margin = 0.0;
+  // An explicit integrator must stay within its stability limit (or within the margin the scene
+  // already ran at); the implicit one has none to check.
   std::string limiting;
-  for (const corde::Rod& rod : world.rods()) {
-    const double m = world.time_step / corde::critical_time_step(rod);
-    if (m > margin) {
-      margin = m;
-      limiting = rod.name();
-    }
-  }
+  const double margin = explicit_margin(world, &limiting);
   if (!std::isfinite(margin) || margin > std::max(1.0, margin_before)) {
     res.success = false;
     res.message = "rejected, nothing changed: time_step " + num(world.time_step) +
-                  " s would exceed the stability limit of rod '" + limiting + "' (h/h_crit " +
-                  num(margin) + "); give a smaller time_step in the same request";
+                  " s would exceed the stability limit of rod '" + limiting + "' for " +
+                  corde::integrator_name(world.integrator) + " (h/h_crit " + num(margin) +
+                  "); give a smaller time_step in the same request, or integrator implicit_euler";
     return;
   }
   std::swap(world_, world);
@@ -122,7 +118,11 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   res.success = true;
   res.message = "configured " +
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
-                summary + "(h/h_crit " + num(stability_margin_) + ")" + note;
+                summary + "(" + corde::integrator_name(world_.integrator) +
+                (world_.integrator == corde::Integrator::kImplicitEuler
+                     ? std::string(", no explicit step limit")
+                     : ", h/h_crit " + num(stability_margin_)) +
+                ")" + note;
   ROS_INFO("corde_sim: %s", res.message.c_str());
   return;
 }

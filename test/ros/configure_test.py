@@ -155,6 +155,38 @@ class Configure(unittest.TestCase):
         self.assertIn("grasp/gripper", frames)
         self.assertTrue(ct.finite_state(s2))
 
+    def test_6_integrator_switch(self):
+        self.assertTrue(self.sim.reset().success)
+        before = self.sim.fresh_state()
+        # An unknown name: refused with the list, nothing changed.
+        r = self.sim.configure(integrator="rk4")
+        self.assertFalse(r.success)
+        self.assertIn("rk4", r.message)
+        self.assertIn("implicit_euler", r.message)
+        # 2 ms is beyond the explicit limit (3.7e-4 s): refused for split_rotation ...
+        r = self.sim.configure(["time_step"], [2e-3])
+        self.assertFalse(r.success)
+        self.assertIn("implicit_euler", r.message)
+        self.assertEqual(self.sim.fresh_state().time_step, before.time_step)
+        # ... and taken with the implicit integrator, which then runs.
+        r = self.sim.configure(["time_step"], [2e-3], integrator="implicit_euler")
+        self.assertTrue(r.success, r.message)
+        self.assertIn("integrator=implicit_euler", r.message)
+        s0 = self.sim.fresh_state()
+        self.assertEqual(s0.time_step, 2e-3)
+        s = self.step(50)
+        self.assertAlmostEqual(s.sim_time - s0.sim_time, 50 * 2e-3, delta=1e-9)
+        self.assertTrue(ct.finite_state(s))
+        # Back to the explicit method at 2 ms: refused, nothing changed; at its own step: taken.
+        r = self.sim.configure(integrator="split_rotation")
+        self.assertFalse(r.success)
+        self.assertIn("time_step", r.message)
+        self.assertEqual(self.sim.fresh_state().time_step, 2e-3)
+        r = self.sim.configure(["time_step"], [H], integrator="split_rotation")
+        self.assertTrue(r.success, r.message)
+        s = self.step(10)
+        self.assertTrue(ct.finite_state(s))
+
 
 if __name__ == "__main__":
     rostest.rosrun("corde_sim", "configure", Configure)

@@ -88,9 +88,9 @@ class Sim:
     def reset(self, scene=""):
         return self.service("reset", Reset)(scene)
 
-    def configure(self, keys=(), values=(), rod="", flags=(), flag_values=()):
+    def configure(self, keys=(), values=(), rod="", flags=(), flag_values=(), integrator=""):
         return self.service("configure", Configure)(rod, list(keys), list(values), list(flags),
-                                                    list(flag_values))
+                                                    list(flag_values), integrator)
 
     def grasp(self, name, rod="rope", arc_length=0.0, point=None, source="", frame=""):
         from geometry_msgs.msg import Point

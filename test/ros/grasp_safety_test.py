@@ -133,7 +133,8 @@ class GraspSafety(unittest.TestCase):
         calls = 0
         while time.monotonic() < since + 2.0:
             if calls % 2:
-                self.assertTrue(configure("", ["damping_time"], [1e-5 * (1 + calls % 3)], [], []).success)
+                self.assertTrue(configure("", ["damping_time"], [1e-5 * (1 + calls % 3)], [], [],
+                                          "").success)
             else:
                 reset("")
             calls += 1

@@ -27,6 +27,7 @@ BAD = [
     (["_scene:=/no/such/scene.yaml"], "scene"),
     (["_overrides:=rods.0.elements=-4"], "elements"),
     (["_grasps/gripper/source:=magic"], "grasps/gripper/source"),
+    (["_integrator:=rk4"], "integrator"),
 ]
 
 
@@ -42,7 +43,7 @@ class StartupParams(unittest.TestCase):
         self.assertFalse(rospy.get_param("/use_sim_time", False))
         scene = rospy.get_param("~scene")
         procs = [(start("bad%d" % i, args, scene), args, what) for i, (args, what) in enumerate(BAD)]
-        good = start("good", [], scene)
+        good = start("good", ["_integrator:=implicit_euler"], scene)
         try:
             end = time.monotonic() + 30.0
             for p, args, what in procs:

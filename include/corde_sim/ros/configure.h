@@ -35,18 +35,29 @@ struct ConfigurePlan {
   std::map<std::string, double> values;  // validated keys
   std::map<std::string, bool> flags;     // validated flags
   std::vector<std::string> resample;     // rods whose element count changes
+  bool set_integrator = false;           // the request names an integrator
+  corde::Integrator integrator = corde::kDefaultIntegrator;
 };
 
 // Keys and flags accepted, for messages and docs.
 const std::vector<std::string>& configure_keys();
 const std::vector<std::string>& configure_flags();
 
-// Checks every key, value and flag (names, counts, finiteness, ranges, rod name) and fills
-// *plan. Returns "" if the request is usable, otherwise the reason.
+// Checks every key, value and flag (names, counts, finiteness, ranges, rod name) and the
+// integrator's name ("" = unchanged), and fills *plan. Returns "" if the request is usable,
+// otherwise the reason.
 std::string plan_configure(const corde::World& world, const std::string& rod,
                            const std::vector<std::string>& keys, const std::vector<double>& values,
                            const std::vector<std::string>& flags,
-                           const std::vector<bool>& flag_values, ConfigurePlan* plan);
+                           const std::vector<bool>& flag_values, const std::string& integrator,
+                           ConfigurePlan* plan);
+
+// Names a configure request or ~integrator may give: every integrator's.
+std::string integrator_names();
+
+// The largest h / h_crit over the rods (and the rod it belongs to) that an explicit integrator
+// would run at; 0 for the implicit one, which has no such limit.
+double explicit_margin(const corde::World& world, std::string* limiting_rod);
 
 // Applies a plan from plan_configure. damping_time sets gamma_t and gamma_r from the (new) moduli;
 // explicit gamma_t / gamma_r given alongside override it. Rods in plan.resample are resampled at

@@ -35,6 +35,7 @@ struct GraspSourceParam {
 struct NodeParams {
   std::string scene;                   // YAML scene file
   std::vector<std::string> overrides;  // "key.path=value" applied to the scene (load_scene)
+  std::string integrator;              // "" = the scene's; else a name or auto (added to overrides)
   std::string world_frame = "world";
   std::string frame_prefix;       // "" or ends with '/'
   double real_time_factor = 1.0;  // 0 = as fast as possible
