@@ -86,7 +86,7 @@ class ImplicitEuler {
   void solve_impulses(const std::vector<Vec3>& impulses, double h);  // into z_
 
   ImplicitOptions opt_;
-  std::vector<Vec3> x0_, v0_, xhat_;
+  std::vector<Vec3> x0_, v0_, xhat_, xs_;
   std::vector<Vec3> gth_;  // per segment: d Phi / d theta (scratch)
   std::vector<Quat> q0_, qk_;
   std::vector<Vec3> what_;   // h w^n per segment (body)

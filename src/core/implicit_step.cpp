@@ -356,7 +356,6 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   double phi = merit(rod, sys, h);
   // Magnitude of the terms Phi sums, for telling its changes from round-off.
   const double phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
-  std::vector<Vec3> xs;
   for (int it = 0; it < opt_.max_iterations; ++it) {
     res.residual = norm_scaled(g_);
     if (res.residual <= std::max(opt_.tolerance * ref, floor)) {
@@ -371,12 +370,12 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     solver_.solve(&d_);
     // Backtracking line search (Armijo) on Phi along the retraction.
     const double slope = g_.dot(d_);
-    xs = x;
+    xs_ = x;
     qk_ = q;
     double alpha = 1.0, phi_new = phi;
     bool accepted = false;
     for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
-      for (int i = 0; i < nn; ++i) x[i] = xs[i] + alpha * d_.segment<3>(6 * i);
+      for (int i = 0; i < nn; ++i) x[i] = xs_[i] + alpha * d_.segment<3>(6 * i);
       for (int s = 0; s < ns; ++s) {
         q[s] = (qk_[s] * exp_body(alpha * d_.segment<3>(6 * s + 3))).normalized();
         theta_[s] = log_body(q0_[s].conjugate() * q[s]);
@@ -400,7 +399,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       }
     }
     if (!accepted) {
-      x = xs;
+      x = xs_;
       q = qk_;
       full_gradient(&g_);
       break;
