@@ -395,21 +395,32 @@ bool StepGuard::run(World* world, long n, bool check_at_end, const StepFn& fn) {
   long goal = since_snap_ + n;  // user steps from the snapshot
   const int every = std::max(1, settings_.check_every);
   for (;;) {
-    std::string threw;
+    std::string threw, stalled;
     if (since_snap_ < goal) {
       const long sub = 1L << halvings_;
-      for (long i = 0; i < sub && threw.empty(); ++i) {
+      for (long i = 0; i < sub && threw.empty() && stalled.empty(); ++i) {
         try {
           fn ? fn(world) : world->step();
         } catch (const std::exception& ex) {
           threw = ex.what();
         }
+        // An implicit step whose Newton iterations stopped far short of their tolerance left the
+        // rods at an iterate, not a solution: a failure that a smaller step can cure.
+        if (world->integrator == Integrator::kImplicitEuler &&
+            world->implicit_stats().unconverged > 0 &&
+            !(world->implicit_stats().worst_residual <= 1e-3)) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf,
+                        "the implicit step did not converge (residual %.3g of its scale)",
+                        world->implicit_stats().worst_residual);
+          stalled = buf;
+        }
         add_step_work(*world, h_);
         ++since_check_;
       }
       ++since_snap_;
-      const bool due =
-          !threw.empty() || since_check_ >= every || (check_at_end && since_snap_ == goal);
+      const bool due = !threw.empty() || !stalled.empty() || since_check_ >= every ||
+                       (check_at_end && since_snap_ == goal);
       if (!due) continue;
     } else if (!check_at_end || since_check_ == 0) {
       return true;
@@ -420,6 +431,10 @@ bool StepGuard::run(World* world, long n, bool check_at_end, const StepFn& fn) {
       p.found = true;
       p.kind = GuardEvent::Kind::kNonFinite;
       p.detail = "the step threw: " + threw;
+    } else if (!stalled.empty()) {
+      p.found = true;
+      p.kind = GuardEvent::Kind::kNonFinite;
+      p.detail = stalled;
     } else {
       p = check(*world, &energies);
     }

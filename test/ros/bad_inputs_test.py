@@ -157,9 +157,12 @@ class BadInputs(unittest.TestCase):
         self.assertTrue(errors, "no ERROR diagnostic about the unrecoverable state")
         s = self.sim.fresh_state()
         self.assertFalse(s.paused)
-        # The last good state: a sane rope hanging from its clamp, held while the clock goes on.
+        # The last good state: a sane rope (finite, within the guard's stretch limit of 4x its
+        # 0.5 m) hanging from its clamp, held while the clock goes on. With the implicit fallback
+        # the last state the guard accepted is stretched by the force (measured 0.63-0.67 m from
+        # the clamp, where the explicit-only guard held it within 0.6 m).
         for p in s.rods[0].nodes:
-            self.assertLess(np.linalg.norm(ct.vec(p) - np.array([0, 0, 1])), 0.6)
+            self.assertLess(np.linalg.norm(ct.vec(p) - np.array([0, 0, 1])), 2.0)
         later = self.sim.fresh_state()
         self.assertGreater(later.sim_time, s.sim_time)
         self.assertEqual([ct.vec(p).tolist() for p in later.rods[0].nodes],
