@@ -410,6 +410,13 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     res.residual = norm_scaled(g_);
     res.converged = res.residual <= std::max(opt_.tolerance * ref, floor);
   }
+  // Forces whose round-off exceeds a thousandth of the loads cannot resolve the motion (a
+  // stiffness beyond double precision at this resolution): the step would "converge" without
+  // moving. Reported as not converged, with that floor as the residual.
+  if (floor > 1e-3 * ref) {
+    res.converged = false;
+    res.residual = std::max(res.residual, floor);
+  }
   // Reactions from the unprojected residual.
   gradient(rod, sys, h, &g_trial_);
   g_trial_.swap(g_);

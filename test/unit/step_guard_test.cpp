@@ -161,6 +161,36 @@ TEST(StepGuard, UnrecoverableKeepsTheLastGoodState) {
   EXPECT_FALSE(guard.failed());
 }
 
+// An impossible stiffness for the implicit method: E = 1e30 Pa, where the forces' round-off
+// exceeds the rod's weight, so Newton cannot resolve the motion (the step would "converge"
+// without moving). The guard is told, halves the step in vain, gives up with a message and keeps
+// the last good state; never a frozen simulation without a word.
+TEST(StepGuard, ImpossibleStiffnessIsReportedForTheImplicitMethod) {
+  Scene s = cantilever(Integrator::kImplicitEuler, 1e30);
+  World& w = s.world;
+  w.time_step = 1e-3;
+  StepGuard guard;
+  guard.reset(w);
+  const World start = w;
+  EXPECT_FALSE(guard.step(&w, 10) && guard.settle(&w));
+  EXPECT_TRUE(guard.failed());
+  EXPECT_TRUE(all_finite(w));
+  EXPECT_EQ(w.rods()[0].positions(), start.rods()[0].positions());
+  ASSERT_FALSE(guard.events().empty());
+  EXPECT_EQ(guard.events().back().kind, Kind::kUnrecoverable);
+  bool named = false;
+  for (const GuardEvent& e : guard.events())
+    named = named || e.message().find("did not converge") != std::string::npos;
+  EXPECT_TRUE(named);
+  // A real stiffness at the same step runs without an event.
+  Scene ok = cantilever(Integrator::kImplicitEuler, 1e7);
+  ok.world.time_step = 1e-3;
+  StepGuard good;
+  good.reset(ok.world);
+  EXPECT_TRUE(good.step(&ok.world, 100) && good.settle(&ok.world));
+  EXPECT_TRUE(good.events().empty());
+}
+
 // An energy source outside the model (a step function that scales every velocity by 1.02, as a
 // broken integrator would): no limit on speed or strain is near, but the energy grows without
 // work done, and the guard names it. The same run without the source has no event.
