@@ -90,6 +90,9 @@ std::string run_problem(const World& world, const RunOptions& options);
 // SceneError if the duration needs more than options.max_steps steps (or the step is not > 0).
 RunResult run_scene(Scene* scene, const RunOptions& options = {});
 
+// The summaries' first lines: the scene (name and file) and its rods with their elements.
+std::string scene_header(const Scene& scene);
+
 // Multiline summary: scene, rods and elements, steps, simulated and wall time, time per step,
 // final kinetic and elastic energy, the guard's events.
 std::string run_summary(const Scene& scene, const RunResult& result);

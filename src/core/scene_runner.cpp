@@ -241,14 +241,17 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   return r;
 }
 
-std::string run_summary(const Scene& scene, const RunResult& r) {
+std::string scene_header(const Scene& scene) {
   std::string rods;
   for (const Rod& rod : scene.world.rods())
     rods += (rods.empty() ? "" : ", ") + rod.name() + " (" + std::to_string(rod.num_segments()) +
             " elements)";
+  return "scene      " + scene.name + " (" + scene.source + ")\nrods       " + rods + "\n";
+}
+
+std::string run_summary(const Scene& scene, const RunResult& r) {
   char buf[512];
-  std::string out = "scene      " + scene.name + " (" + scene.source + ")\n";
-  out += "rods       " + rods + "\n";
+  std::string out = scene_header(scene);
   for (const std::string& note : scene.notes) out += "chosen     " + note + "\n";
   const bool implicit = scene.world.integrator == Integrator::kImplicitEuler;
   for (const Rod& rod : scene.world.rods()) {

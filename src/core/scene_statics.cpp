@@ -9,6 +9,7 @@
 
 #include "corde_sim/grasp.h"
 #include "corde_sim/reactions.h"
+#include "corde_sim/scene_runner.h"
 
 namespace corde {
 namespace {
@@ -267,13 +268,8 @@ RodEquilibrium settle_rod(Scene* scene, Rod* rod) {
 }
 
 std::string statics_summary(const Scene& scene, const SceneEquilibrium& eq) {
-  std::string rods;
-  for (const Rod& rod : scene.world.rods())
-    rods += (rods.empty() ? "" : ", ") + rod.name() + " (" + std::to_string(rod.num_segments()) +
-            " elements)";
   char buf[512];
-  std::string out = "scene      " + scene.name + " (" + scene.source + ")\n";
-  out += "rods       " + rods + "\n";
+  std::string out = scene_header(scene);
   std::snprintf(buf, sizeof buf, "statics    equilibrium at t = %.6g s, wall time %.3g s\n",
                 eq.time, eq.wall_seconds);
   out += buf;
