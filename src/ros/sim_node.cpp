@@ -125,9 +125,9 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   paused_ = params_.start_paused;
   ROS_INFO(
       "corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), integrator %s, time step %g s, "
-      "h/h_crit %.3f%s",
+      "%s%s",
       initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(),
-      corde::integrator_name(world_.integrator), world_.time_step, stability_margin_,
+      corde::integrator_name(world_.integrator), world_.time_step, margin_text().c_str(),
       paused_ ? ", paused" : "");
 }
 
@@ -141,6 +141,14 @@ void SimNode::bump_time() {
   // A changed state (reset, configure, grasp) gets a later stamp than anything published before,
   // so tf listeners never see two different poses at one stamp.
   time_offset_ += world_.time_step;
+}
+
+std::string SimNode::margin_text() const {
+  // The explicit limit means nothing to the implicit method: saying 0 would read as a margin.
+  if (world_.integrator == corde::Integrator::kImplicitEuler) return "no explicit step limit";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "h/h_crit %.3g", stability_margin_);
+  return buf;
 }
 
 void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &limiting_rod_); }
@@ -432,9 +440,9 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
 void SimNode::log_status() const {
   ROS_INFO(
       "corde_sim: t = %.3f s, %lu steps of %g s, real-time factor %.3g (target %g%s), "
-      "%.2f us/step, h/h_crit %.2f%s",
+      "%.2f us/step, %s%s",
       sim_time(), steps_total_, world_.time_step, measured_rtf_, params_.real_time_factor,
-      params_.real_time_factor > 0.0 ? "" : " = max", step_time_us_, stability_margin_,
+      params_.real_time_factor > 0.0 ? "" : " = max", step_time_us_, margin_text().c_str(),
       paused_ ? ", paused" : "");
 }
 

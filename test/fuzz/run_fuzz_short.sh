@@ -30,8 +30,9 @@ fi
 bin="$work/scene_fuzz"
 flags="-std=c++17 -O1 -g -fsanitize=fuzzer-no-link,address,undefined"
 flags="$flags -fno-sanitize-recover=undefined -I$src/include -isystem /usr/include/eigen3"
-newest_header=$(find "$src/include/corde_sim" "$src/src/core" -name "*.h" -printf "%T@ %p\n" |
-  sort -n | tail -n 1 | cut -d" " -f2-)
+# The library's own headers only: the ROS adapter's (include/corde_sim/ros/) are not compiled here.
+newest_header=$({ find "$src/include/corde_sim" -maxdepth 1 -name "*.h" -printf "%T@ %p\n";
+  find "$src/src/core" -name "*.h" -printf "%T@ %p\n"; } | sort -n | tail -n 1 | cut -d" " -f2-)
 stale=""
 objects=()
 for f in "$src"/src/core/*.cpp "$src"/test/fuzz/scene_fuzz.cpp; do

@@ -227,7 +227,7 @@ void fix_node(Rod* rod, int node) {
   rod->add_node_drive(fix);
 }
 
-// The default scene's cable (soft_cable, E_s = 50 MPa, r = 3 mm) as a cantilever: node 0 fixed,
+// The softened power cord of drape_table.yaml (soft_cable, E_s = 50 MPa, r = 3 mm) as a cantilever: node 0 fixed,
 // ghost clamp, straight, sagging under gravity. gamma_r damps the first bending mode critically
 // (Kelvin-Voigt gives it the damping ratio gamma_r omega_1 / (2B); omega_1 = 1.8751^2
 // sqrt(B / (rho A)) / L^2).
@@ -245,7 +245,7 @@ Rod cable_cantilever(double length, int elements, double kappa) {
   perturb(&rod);
   return rod;
 }
-// As in the default scene: 1 m, 40 elements, kappa = 60 N (0.2 G A).
+// As in drape_table.yaml: 1 m, 40 elements, kappa = 60 N (0.2 G A).
 Rod cable_cantilever_scene() { return cable_cantilever(1.0, 40, 60.0); }
 // A 10 cm stub with 40 elements (2.5 mm, below the radius) and a stiff penalty (20 G A).
 Rod cable_cantilever_stub() {

@@ -157,6 +157,7 @@ class SimNode {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
   void log_status() const;
   void update_stability();
+  std::string margin_text() const;
   void bump_time();
   ros::Time stamp() const;
   std::vector<GraspView> grasp_views() const;
