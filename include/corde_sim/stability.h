@@ -63,8 +63,9 @@ struct StateStabilityEstimate {
 };
 StateStabilityEstimate estimate_stability_at_state(const Rod& rod);
 
-// min(critical_time_step(rod), estimate_stability_at_state(rod).time_step): what `time_step: auto`
-// and the stability guard use. Costs about 100 factorisations of the rod's 6x6 block system.
+// The smaller of critical_time_step(rod) and estimate_stability_at_state(rod).time_step (the
+// rest value where they agree to round-off): what `time_step: auto` (at the start) and the
+// stability guard (at a rollback) use. Costs about 100 factorisations of the rod's 6x6 blocks.
 double state_critical_time_step(const Rod& rod);
 
 }  // namespace corde
