@@ -43,4 +43,29 @@ StabilityEstimate estimate_stability(const Rod& rod);
 // estimate_stability(rod).time_step. Run with about 0.8 of it for margin.
 double critical_time_step(const Rod& rod);
 
+// The explicit step linearised about the rod's CURRENT state rather than the straight rest state.
+// Large deformation moves the limit: the coupling penalty l kappa (1 - t.d3) stiffens the nodes'
+// transverse motion as kappa l / |d|^2, so an element compressed to half its length has four
+// times the stiffness there (the limit of a collapsing soft rod, docs/charts.md, "Stability
+// map"); tension adds its geometric stiffness, bent and sheared frames tilt the blocks. Here K is
+// the exact Hessian of the elastic energy (rod_system.h, every second-order term) at the current
+// positions and orientations, M the node masses and the segments' body inertias, D the internal
+// friction in the current tangents and frames; kinematic nodes and segments are removed. The
+// step is the largest h with 4 M - h^2 K - 2 h D positive definite (block Cholesky, bisected;
+// O(N) per factorisation, about 100 of them). The gyroscopic terms and the skew part of the
+// torque Jacobian off equilibrium are neglected. At the rest state it equals
+// estimate_stability(rod).time_step.
+struct StateStabilityEstimate {
+  double time_step = 0.0;       // critical step about the current state (s); inf: no limit
+  double omega_max = 0.0;       // sqrt of the top eigenvalue of M^-1 K (rad/s)
+  int block = -1;               // node / segment index where the top mode of M^-1 K is largest
+  double rotation_share = 0.0;  // part of that mode's mass-weighted norm^2 on the rotations
+};
+StateStabilityEstimate estimate_stability_at_state(const Rod& rod);
+
+// The smaller of critical_time_step(rod) and estimate_stability_at_state(rod).time_step (the
+// rest value where they agree to round-off): what `time_step: auto` (at the start) and the
+// stability guard (at a rollback) use. Costs about 100 factorisations of the rod's 6x6 blocks.
+double state_critical_time_step(const Rod& rod);
+
 }  // namespace corde

@@ -119,9 +119,13 @@ double explicit_time_step(const World& world, std::string* why) {
   double limit = INFINITY;
   for (const Rod& rod : world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
-    if (std::isnan(e.time_step) || e.time_step < limit) {
-      limit = e.time_step;
-      *why = "the stability limit of rod '" + rod.name() + "' (" + e.limiting + " modes)";
+    // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
+    const double h = state_critical_time_step(rod);
+    if (std::isnan(h) || h < limit) {
+      limit = h;
+      *why = "the stability limit of rod '" + rod.name() + "' (" +
+             (h < e.time_step ? std::string("modes of its start shape") : e.limiting + " modes") +
+             ")";
     }
   }
   return limit > 0.0 && std::isfinite(limit) ? 0.8 * limit : 0.0;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <vector>
 
+#include "corde_sim/rod_system.h"
+
 namespace corde {
 namespace {
 
@@ -211,5 +213,184 @@ StabilityEstimate estimate_stability(const Rod& rod) {
 }
 
 double critical_time_step(const Rod& rod) { return estimate_stability(rod).time_step; }
+
+namespace {
+
+// The rod's mass-scaled stiffness M^-1/2 K M^-1/2 and friction M^-1/2 D M^-1/2 at its current
+// state, in rod_system.h's blocks; kinematic items and the unused slot are zero rows and columns.
+struct ScaledSystem {
+  BlockTridiag k, d;
+  std::vector<bool> free;  // per unknown
+  bool damped = false;
+};
+
+ScaledSystem scaled_system(const Rod& rod) {
+  ScaledSystem s;
+  RodSystem sys;
+  sys.rod = &rod;
+  sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;  // gravity, dead loads: linear
+  sys.hessian(&s.k);
+  const int nb = sys.blocks(), n = rod.num_segments(), size = sys.size();
+  s.d.resize(nb);
+  s.d.set_zero();
+  const Section& sec = rod.section();
+  const auto& x = rod.positions();
+  const auto& q = rod.orientations();
+  const auto& rest = rod.rest_lengths();
+  // Friction as the explicit step applies it: gamma_t / l on the chord's rate along its tangent,
+  // gamma_r / l on the difference of the neighbours' world angular velocities (ghost elements
+  // none). Body rates w map to world ones by R.
+  if (sec.gamma_t > 0.0)
+    for (int i = 0; i < n; ++i) {
+      const Vec3 t = (x[i + 1] - x[i]).normalized();
+      const Mat3 m = (sec.gamma_t / rest[i]) * t * t.transpose();
+      const int a = RodSystem::node_index(i), b = RodSystem::node_index(i + 1);
+      s.d.add(a, a, m);
+      s.d.add(b, b, m);
+      s.d.add(b, a, -m);
+    }
+  if (sec.gamma_r > 0.0)
+    for (int j = 0; j + 1 < n; ++j) {
+      const double g = sec.gamma_r / (0.5 * (rest[j] + rest[j + 1]));
+      const int a = RodSystem::segment_index(j), b = RodSystem::segment_index(j + 1);
+      s.d.add(a, a, g * Mat3::Identity());
+      s.d.add(b, b, g * Mat3::Identity());
+      s.d.add(b, a, -g * (q[j + 1].toRotationMatrix().transpose() * q[j].toRotationMatrix()));
+    }
+  s.damped = sec.gamma_t > 0.0 || sec.gamma_r > 0.0;
+  // Inverse square roots of the masses; zero removes the unknown.
+  std::vector<double> w(size, 0.0);
+  s.free.assign(size, false);
+  std::vector<bool> node_free(n + 1, true), seg_free(n, true);
+  for (const NodeDrive& dr : rod.node_drives()) node_free[dr.node] = false;
+  for (const SegmentDrive& dr : rod.segment_drives()) seg_free[dr.segment] = false;
+  for (int i = 0; i <= n; ++i)
+    if (node_free[i] && rod.node_masses()[i] > 0.0)
+      for (int c = 0; c < 3; ++c) {
+        w[RodSystem::node_index(i) + c] = 1.0 / std::sqrt(rod.node_masses()[i]);
+        s.free[RodSystem::node_index(i) + c] = true;
+      }
+  for (int j = 0; j < n; ++j)
+    if (seg_free[j])
+      for (int c = 0; c < 3; ++c)
+        if (rod.segment_inertia(j)[c] > 0.0) {
+          w[RodSystem::segment_index(j) + c] = 1.0 / std::sqrt(rod.segment_inertia(j)[c]);
+          s.free[RodSystem::segment_index(j) + c] = true;
+        }
+  for (BlockTridiag* m : {&s.k, &s.d}) {
+    for (int b = 0; b < nb; ++b)
+      for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < 6; ++c) {
+          m->diag[b](r, c) *= w[6 * b + r] * w[6 * b + c];
+          if (b + 1 < nb) m->lower[b](r, c) *= w[6 * b + 6 + r] * w[6 * b + c];
+        }
+  }
+  return s;
+}
+
+// True when a I - b K - c D is positive definite (removed unknowns: identity rows).
+bool definite(const ScaledSystem& s, double a, double b, double c, BlockTridiag* m,
+              BlockTridiagSolver* solver) {
+  const int nb = s.k.blocks();
+  m->resize(nb);
+  for (int k = 0; k < nb; ++k) {
+    m->diag[k] = -b * s.k.diag[k] - c * s.d.diag[k];
+    if (k + 1 < nb) m->lower[k] = -b * s.k.lower[k] - c * s.d.lower[k];
+    for (int r = 0; r < 6; ++r) m->diag[k](r, r) += s.free[6 * k + r] ? a : 1.0;
+  }
+  return solver->factor(*m);
+}
+
+// Gershgorin bound on the top eigenvalue of a block tridiagonal matrix.
+double gershgorin(const BlockTridiag& a) {
+  const int nb = a.blocks();
+  double hi = 0.0;
+  for (int k = 0; k < nb; ++k)
+    for (int r = 0; r < 6; ++r) {
+      double row = a.diag[k](r, r);
+      for (int c = 0; c < 6; ++c)
+        if (c != r) row += std::abs(a.diag[k](r, c));
+      if (k + 1 < nb) row += a.lower[k].row(r).cwiseAbs().sum();
+      if (k > 0) row += a.lower[k - 1].col(r).cwiseAbs().sum();
+      hi = std::max(hi, row);
+    }
+  return hi;
+}
+
+}  // namespace
+
+StateStabilityEstimate estimate_stability_at_state(const Rod& rod) {
+  StateStabilityEstimate e;
+  const ScaledSystem s = scaled_system(rod);
+  BlockTridiag m;
+  BlockTridiagSolver solver;
+  // Top eigenvalue of K: sigma I - K is definite above it.
+  double lo = 0.0, hi = gershgorin(s.k) * (1.0 + 1e-12);
+  double w2 = 0.0;
+  if (hi > 0.0 && !definite(s, 1e-14 * hi, 1.0, 0.0, &m, &solver)) {
+    // K has an eigenvalue above round-off (a free or collapsed rod may have none).
+    for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      (definite(s, mid, 1.0, 0.0, &m, &solver) ? hi : lo) = mid;
+    }
+    w2 = hi;
+  }
+  e.omega_max = std::sqrt(w2);
+  double c = 0.0;  // top eigenvalue of D
+  if (s.damped) {
+    double dlo = 0.0, dhi = gershgorin(s.d) * (1.0 + 1e-12);
+    for (int it = 0; it < 200 && dhi > 0.0 && dhi - dlo > 1e-13 * dhi; ++it) {
+      const double mid = 0.5 * (dlo + dhi);
+      (definite(s, mid, 0.0, -1.0, &m, &solver) ? dhi : dlo) = mid;
+    }
+    c = dhi;
+  }
+  if (!(w2 > 0.0) && !(c > 0.0)) {
+    e.time_step = kInf;
+    return e;
+  }
+  if (!(c > 0.0)) {
+    e.time_step = 2.0 / std::sqrt(w2);
+  } else {
+    // 4 I - h^2 K - 2 h D definite: bisected below the bounds of K's and D's top vectors.
+    double h_lo = 0.0, h_hi = 2.0 / c;
+    if (w2 > 0.0) h_hi = std::min(h_hi, 2.0 / std::sqrt(w2));
+    for (int it = 0; it < 200 && h_hi - h_lo > 1e-13 * h_hi; ++it) {
+      const double h = 0.5 * (h_lo + h_hi);
+      (definite(s, 4.0, h * h, 2.0 * h, &m, &solver) ? h_lo : h_hi) = h;
+    }
+    e.time_step = h_lo;
+  }
+  // Where K's top mode lives: inverse iteration just above its eigenvalue.
+  if (w2 > 0.0 && definite(s, w2 * (1.0 + 1e-6), 1.0, 0.0, &m, &solver)) {
+    Eigen::VectorXd v = Eigen::VectorXd::Ones(s.k.size());
+    for (int i = 0; i < v.size(); ++i)
+      if (!s.free[i]) v[i] = 0.0;
+    for (int it = 0; it < 8; ++it) {
+      solver.solve(&v);
+      for (int i = 0; i < v.size(); ++i)
+        if (!s.free[i]) v[i] = 0.0;
+      v.normalize();
+    }
+    double best = -1.0, rot = 0.0;
+    for (int b = 0; b < s.k.blocks(); ++b) {
+      const double tn = v.segment<3>(6 * b).squaredNorm(),
+                   rn = v.segment<3>(6 * b + 3).squaredNorm();
+      rot += rn;
+      if (std::max(tn, rn) > best) {
+        best = std::max(tn, rn);
+        e.block = b;
+      }
+    }
+    e.rotation_share = rot;
+  }
+  return e;
+}
+
+double state_critical_time_step(const Rod& rod) {
+  const double rest = critical_time_step(rod), state = estimate_stability_at_state(rod).time_step;
+  // At the rest state both agree to their bisections' 1e-13: keep the rest value there exactly.
+  return state < rest * (1.0 - 1e-9) ? state : rest;
+}
 
 }  // namespace corde
