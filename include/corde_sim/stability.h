@@ -43,4 +43,13 @@ StabilityEstimate estimate_stability(const Rod& rod);
 // estimate_stability(rod).time_step. Run with about 0.8 of it for margin.
 double critical_time_step(const Rod& rod);
 
+// `rotational_inertia_scale: auto`: the smallest rotary-inertia scale (Rod::
+// set_rotational_inertia_scale, >= 1) at which the bending-shear family's critical step reaches
+// 0.99 of the next limit, the stretch or twist family's (or, when the penalty on the nodes alone
+// limits below those, 0.99 of what any scale can give). 1 when the coupling penalty does not
+// limit. The rod's own scale is ignored. Lifting to the stretch limit l sqrt(rho / E_s) takes
+// about s = (l / r)^2 kappa / K_s, which shifts a bending mode of wavenumber k by about
+// -(kappa / K_s) (k l)^2 / 8: the order of the discrete rod's own O((k l)^2) frequency error.
+double lifting_inertia_scale(const Rod& rod);
+
 }  // namespace corde

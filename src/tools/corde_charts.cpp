@@ -23,6 +23,8 @@ const char* kUsage =
 struct Plan {
   bool full = true;
   std::vector<int> sag_n, v8_n, cable_n, map_n, scale_n;
+  // split_rotation with rotational_inertia_scale: auto (at 0.9 of its step only).
+  std::vector<int> sag_scaled_n, cable_scaled_n;
   std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, youngs, h_omega;
   std::vector<int> modes;
   int damping_n = 40, cable_ref_n = 320;
@@ -38,6 +40,9 @@ Plan make_plan(bool full) {
     p.sag_n = {10, 20, 40, 80, 160};
     p.v8_n = {10, 20, 40, 80};
     p.cable_n = {10, 20, 40, 80, 160};
+    p.sag_scaled_n = {6,  8,  10, 11, 12, 13, 14, 16, 18, 20, 22, 23, 24,
+                      28, 32, 40, 44, 46, 48, 56, 64, 80, 92, 96, 160};
+    p.cable_scaled_n = {10, 20, 40, 80, 160};
     p.map_n = {10, 40, 160};
     p.scale_n = {10, 30, 100, 300, 1000, 3000, 10000};
     p.explicit_fractions = {0.9, 0.45};
@@ -48,7 +53,7 @@ Plan make_plan(bool full) {
     p.h_omega = {0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0};
     p.modes = {1, 3};
   } else {
-    p.sag_n = p.v8_n = p.cable_n = p.map_n = {10};
+    p.sag_n = p.v8_n = p.cable_n = p.map_n = p.sag_scaled_n = p.cable_scaled_n = {10};
     p.scale_n = {10, 100};
     p.explicit_fractions = {0.9};
     p.sag_h = p.v8_h = p.cable_h = {2e-3};
@@ -87,6 +92,18 @@ void row(FILE* f, const char* scene, Method m, int n, const WorkPoint& p) {
                method_name(m), n, p.h, p.cpu_per_frame_us, p.error);
 }
 
+// The scale `auto` chose and the steps it gives (stderr only: the CSV's h has the step).
+void log_scale(const char* scene, int n, const Rod& rod) {
+  Rod physical = rod;
+  physical.set_rotational_inertia_scale(1.0);
+  const StabilityEstimate e = estimate_stability(rod);
+  std::fprintf(stderr,
+               "%-6s N=%-4d rotational_inertia_scale auto = %.4g: step %.3g s (%s), "
+               "physical %.3g s\n",
+               scene, n, rod.rotational_inertia_scale(), e.time_step, e.limiting.c_str(),
+               critical_time_step(physical));
+}
+
 // The steps each method runs a scene at: explicit methods at fractions of the critical step
 // (rounded down to whole steps per `frame` when frame > 0), the implicit one at fixed steps.
 std::vector<double> steps_for(Method m, const Rod& rod, const Plan& plan,
@@ -94,7 +111,8 @@ std::vector<double> steps_for(Method m, const Rod& rod, const Plan& plan,
   if (!is_explicit(m)) return implicit_h;
   std::vector<double> hs;
   const double crit = critical_time_step(rod);
-  for (double f : plan.explicit_fractions)
+  const std::vector<double> scaled = {0.9};
+  for (double f : m == Method::kSplitRotationScaled ? scaled : plan.explicit_fractions)
     hs.push_back(frame > 0.0 ? frame / std::ceil(frame / (f * crit)) : f * crit);
   return hs;
 }
@@ -109,6 +127,13 @@ bool work_precision(const Plan& plan, const std::string& dir) {
     for (int n : plan.sag_n)
       for (double h : steps_for(m, SagScene::rod(n), plan, plan.sag_h, 0.0))
         row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref));
+  const Method scaled = Method::kSplitRotationScaled;
+  for (int n : plan.sag_scaled_n) {
+    const Rod rod = SagScene::rod(n, scaled);
+    log_scale("sag", n, rod);
+    for (double h : steps_for(scaled, rod, plan, {}, 0.0))
+      row(f, "sag", scaled, n, sag_point(scaled, n, h, plan.sag_duration, ref));
+  }
   for (Method m : kMethods)
     for (int n : plan.v8_n) {
       v8::StepCase c;
@@ -125,14 +150,21 @@ bool work_precision(const Plan& plan, const std::string& dir) {
       cable_tips(Method::kSplitRotation, nr, hr, plan.cable_duration, &rp);
   std::fprintf(stderr, "cable reference: N = %d, h = %.3g, %.1f us/frame\n", nr, hr,
                rp.cpu_per_frame_us);
+  auto cable_row = [&](Method m, int n, double h) {
+    WorkPoint p;
+    const std::vector<Vec3> tips = cable_tips(m, n, h, plan.cable_duration, &p);
+    if (std::isfinite(p.error)) p.error = tip_history_error(tips, ref_tips);
+    row(f, "cable", m, n, p);
+  };
   for (Method m : kMethods)
     for (int n : plan.cable_n)
-      for (double h : steps_for(m, CableScene::rod(n), plan, plan.cable_h, kCableFrame)) {
-        WorkPoint p;
-        const std::vector<Vec3> tips = cable_tips(m, n, h, plan.cable_duration, &p);
-        if (std::isfinite(p.error)) p.error = tip_history_error(tips, ref_tips);
-        row(f, "cable", m, n, p);
-      }
+      for (double h : steps_for(m, CableScene::rod(n), plan, plan.cable_h, kCableFrame))
+        cable_row(m, n, h);
+  for (int n : plan.cable_scaled_n) {
+    const Rod rod = CableScene::rod(n, scaled);
+    log_scale("cable", n, rod);
+    for (double h : steps_for(scaled, rod, plan, {}, kCableFrame)) cable_row(scaled, n, h);
+  }
   std::fclose(f);
   return true;
 }
