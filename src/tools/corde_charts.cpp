@@ -14,9 +14,9 @@ namespace charts {
 namespace {
 
 const char* kUsage =
-    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping]\n"
+    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping|sag]\n"
     "  --short    a few coarse points of every chart (seconds; the test runs it)\n"
-    "  --only L   only these charts (default all)\n"
+    "  --only L   only these charts (default all); sag: only scene (a) of work\n"
     "  --out DIR  folder for work_precision.csv, stability_map.csv, scaling.csv, damping.csv\n"
     "             (default docs/charts)\n";
 
@@ -27,7 +27,7 @@ struct Plan {
   std::vector<int> sag_scaled_n, cable_scaled_n;
   std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, youngs, h_omega;
   std::vector<int> modes;
-  int damping_n = 40, cable_ref_n = 320;
+  int damping_n = 40, cable_ref_n = 320, sag_repeats = 5;
   double sag_duration = 0.5, v8_periods = 5.0, cable_duration = 0.5, scale_cpu = 0.2;
   long map_steps_explicit = 1000, map_steps_implicit = 200;
   int map_iterations = 6;
@@ -62,6 +62,7 @@ Plan make_plan(bool full) {
     p.modes = {1};
     p.damping_n = 10;
     p.cable_ref_n = 20;
+    p.sag_repeats = 1;
     p.sag_duration = 0.02;
     p.v8_periods = 0.2;
     p.cable_duration = 0.02;
@@ -117,7 +118,7 @@ std::vector<double> steps_for(Method m, const Rod& rod, const Plan& plan,
   return hs;
 }
 
-bool work_precision(const Plan& plan, const std::string& dir) {
+bool work_precision(const Plan& plan, const std::string& dir, bool sag_only) {
   FILE* f = open_csv(dir, "work_precision.csv",
                      "scene,method,elements,h,cpu_per_frame_us,error,newton_per_step,failures");
   if (!f) return false;
@@ -126,13 +127,17 @@ bool work_precision(const Plan& plan, const std::string& dir) {
   for (Method m : kMethods)
     for (int n : plan.sag_n)
       for (double h : steps_for(m, SagScene::rod(n), plan, plan.sag_h, 0.0))
-        row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref));
+        row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref, plan.sag_repeats));
   const Method scaled = Method::kSplitRotationScaled;
   for (int n : plan.sag_scaled_n) {
     const Rod rod = SagScene::rod(n, scaled);
     log_scale("sag", n, rod);
     for (double h : steps_for(scaled, rod, plan, {}, 0.0))
-      row(f, "sag", scaled, n, sag_point(scaled, n, h, plan.sag_duration, ref));
+      row(f, "sag", scaled, n, sag_point(scaled, n, h, plan.sag_duration, ref, plan.sag_repeats));
+  }
+  if (sag_only) {
+    std::fclose(f);
+    return true;
   }
   for (Method m : kMethods)
     for (int n : plan.v8_n) {
@@ -269,8 +274,9 @@ int main(int argc, char** argv) {
   }
   const Plan plan = make_plan(full);
   auto want = [&](const char* name) { return only.find(name) != std::string::npos; };
-  const bool ok =
-      (!want("work") || work_precision(plan, dir)) && (!want("map") || stability_map(plan, dir)) &&
-      (!want("scaling") || scaling(plan, dir)) && (!want("damping") || damping(plan, dir));
+  const bool ok = (!(want("work") || want("sag")) || work_precision(plan, dir, !want("work"))) &&
+                  (!want("map") || stability_map(plan, dir)) &&
+                  (!want("scaling") || scaling(plan, dir)) &&
+                  (!want("damping") || damping(plan, dir));
   return ok ? 0 : 1;
 }
