@@ -24,9 +24,9 @@ COLUMNS = {
                     "factor_per_step", "theory_per_step", "decay_per_period",
                     "theory_decay_per_period", "damping_ratio", "theory_damping_ratio"],
 }
-# --short: 3 scenes x 3 methods plus split_rotation_scaled on sag and cable, 3 methods x 2 moduli,
+# --short: 3 scenes x 4 methods (split_rotation_scaled included), 3 methods x 2 moduli,
 # 3 methods x 2 N, 2 implicit + 1 explicit.
-ROWS = {"work_precision.csv": 11, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 3}
+ROWS = {"work_precision.csv": 12, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 3}
 
 failures = []
 
