@@ -286,7 +286,14 @@ void read_inertia_scale(const Value& v, Rod* rod, std::vector<std::string>* note
   double scale = 1.0;
   if (v.is_scalar() && v.node().Scalar() == "auto") {
     scale = lifting_inertia_scale(*rod);
-    notes->push_back(v.path() + ": auto: " + num(scale) + " (rod '" + rod->name() + "')");
+    Rod scaled = *rod;
+    scaled.set_rotational_inertia_scale(scale);
+    char step[96];  // the rod's name may be long: only numbers go through the buffer
+    std::snprintf(step, sizeof step, "explicit step limit %.3g s instead of %.3g s",
+                  critical_time_step(scaled), critical_time_step(*rod));
+    char sc[32];
+    std::snprintf(sc, sizeof sc, "%.4g", scale);
+    notes->push_back(v.path() + ": auto: " + sc + " (rod '" + rod->name() + "'): " + step);
   } else {
     scale = v.number();
     if (!(scale >= 1.0))
