@@ -48,8 +48,9 @@ double critical_time_step(const Rod& rod);
 // 0.99 of the next limit, the stretch or twist family's (or, when the penalty on the nodes alone
 // limits below those, 0.99 of what any scale can give). 1 when the coupling penalty does not
 // limit. The rod's own scale is ignored. Lifting to the stretch limit l sqrt(rho / E_s) takes
-// about s = (l / r)^2 kappa / K_s, which shifts a bending mode of wavenumber k by about
-// -(kappa / K_s) (k l)^2 / 8: the order of the discrete rod's own O((k l)^2) frequency error.
+// 1.5 to 2 times s = (l / r)^2 kappa / K_s at coarse N, which shifts a bending mode of wavenumber
+// k by as many times -(kappa / K_s) (k l)^2 / 8: the order of the discrete rod's own O((k l)^2)
+// frequency error (docs/model.md, "Rotary-inertia scaling").
 double lifting_inertia_scale(const Rod& rod);
 
 }  // namespace corde
