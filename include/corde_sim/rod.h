@@ -68,6 +68,14 @@ class Rod {
   void set_section(const Section& section);
   // Rest lengths, recomputing masses and inertia.
   void set_rest_lengths(const std::vector<double>& rest);
+  // Rotary-inertia scaling (docs/model.md, "Rotary-inertia scaling"): the segments' inertia about
+  // d1 and d2 (the tilt of the cross-section, the rotary inertia of bending) is `scale` times
+  // the physical rho I l; the twist inertia about d3 stays physical. 1 = physical (default). It
+  // leaves every equilibrium unchanged and lifts the explicit step's coupling-penalty limit by
+  // sqrt(scale); a bending mode of wavenumber k shifts by -(scale - 1) (I/A) k^2 / 2 (relative,
+  // to first order). Throws std::invalid_argument unless 1 <= scale < infinity.
+  void set_rotational_inertia_scale(double scale);
+  double rotational_inertia_scale() const { return inertia_scale_; }
 
   // Boundary conditions and loads. Adding a drive makes the node or segment kinematic.
   void add_node_drive(const NodeDrive& d);
@@ -163,6 +171,7 @@ class Rod {
   std::vector<Vec3> w_, tau_;
   std::vector<double> rest_, rest_elem_, mass_, inv_mass_;
   std::vector<Vec3> inertia_, uhat_;
+  double inertia_scale_ = 1.0;  // set_rotational_inertia_scale
 
   // Constants precomputed from the rest lengths and the section (the step divides by nothing of
   // them), one array each so that the step's loops read unit-stride streams and vectorise.

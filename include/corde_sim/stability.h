@@ -67,5 +67,14 @@ StateStabilityEstimate estimate_stability_at_state(const Rod& rod);
 // rest value where they agree to round-off): what `time_step: auto` (at the start) and the
 // stability guard (at a rollback) use. Costs about 100 factorisations of the rod's 6x6 blocks.
 double state_critical_time_step(const Rod& rod);
+// `rotational_inertia_scale: auto`: the smallest rotary-inertia scale (Rod::
+// set_rotational_inertia_scale, >= 1) at which the bending-shear family's critical step reaches
+// 0.99 of the next limit, the stretch or twist family's (or, when the penalty on the nodes alone
+// limits below those, 0.99 of what any scale can give). 1 when the coupling penalty does not
+// limit. The rod's own scale is ignored. Lifting to the stretch limit l sqrt(rho / E_s) takes
+// 1.5 to 2 times s = (l / r)^2 kappa / K_s at coarse N, which shifts a bending mode of wavenumber
+// k by as many times -(kappa / K_s) (k l)^2 / 8: the order of the discrete rod's own O((k l)^2)
+// frequency error (docs/model.md, "Rotary-inertia scaling").
+double lifting_inertia_scale(const Rod& rod);
 
 }  // namespace corde

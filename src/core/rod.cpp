@@ -61,6 +61,15 @@ void Rod::set_section(const Section& section) {
   update_mass_and_inertia();
 }
 
+void Rod::set_rotational_inertia_scale(double scale) {
+  if (!(scale >= 1.0) || !std::isfinite(scale))
+    throw std::invalid_argument("rod '" + name_ +
+                                "': rotational_inertia_scale must be a finite number >= 1, got " +
+                                std::to_string(scale));
+  inertia_scale_ = scale;
+  update_mass_and_inertia();
+}
+
 void Rod::update_mass_and_inertia() {
   const size_t n = q_.size();
   mass_.assign(n + 1, 0.0);
@@ -70,8 +79,8 @@ void Rod::update_mass_and_inertia() {
     const double m = section_.mass_per_length * rest_[s];
     mass_[s] += 0.5 * m;
     mass_[s + 1] += 0.5 * m;
-    inertia_[s] =
-        Vec3(section_.inertia_bend, section_.inertia_bend, section_.inertia_twist) * rest_[s];
+    const double bend = inertia_scale_ * section_.inertia_bend;
+    inertia_[s] = Vec3(bend, bend, section_.inertia_twist) * rest_[s];
   }
   for (size_t i = 0; i <= n; ++i) inv_mass_[i] = 1.0 / mass_[i];
   inv_rest_.resize(n);

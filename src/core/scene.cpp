@@ -10,8 +10,8 @@
 #include <map>
 #include <sstream>
 
-#include "corde_sim/scene_statics.h"
 #include "corde_sim/auto_step.h"
+#include "corde_sim/scene_statics.h"
 #include "corde_sim/stability.h"
 #include "scene_elements.h"
 #include "scene_reader.h"
@@ -281,6 +281,27 @@ Drag read_drag(const Value& v, double radius) {
   return d;
 }
 
+// `rotational_inertia_scale`: a number >= 1, or auto (stability.h, lifting_inertia_scale).
+void read_inertia_scale(const Value& v, Rod* rod, std::vector<std::string>* notes) {
+  double scale = 1.0;
+  if (v.is_scalar() && v.node().Scalar() == "auto") {
+    scale = lifting_inertia_scale(*rod);
+    Rod scaled = *rod;
+    scaled.set_rotational_inertia_scale(scale);
+    char step[96];  // the rod's name may be long: only numbers go through the buffer
+    std::snprintf(step, sizeof step, "explicit step limit %.3g s instead of %.3g s",
+                  critical_time_step(scaled), critical_time_step(*rod));
+    char sc[32];
+    std::snprintf(sc, sizeof sc, "%.4g", scale);
+    notes->push_back(v.path() + ": auto: " + sc + " (rod '" + rod->name() + "'): " + step);
+  } else {
+    scale = v.number();
+    if (!(scale >= 1.0))
+      v.fail("must be >= 1 (1 = physical rotary inertia) or auto, got " + num(scale));
+  }
+  rod->set_rotational_inertia_scale(scale);
+}
+
 struct RodEntry {
   std::string path;
   Owners owners;
@@ -348,6 +369,8 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
   if (auto l = m.find("loads"))
     for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
       read_load(item, rod, &scene->warnings);
+  // After the supports: `auto` reads the stability limits of the rod as it is held.
+  if (auto p = m.find("rotational_inertia_scale")) read_inertia_scale(*p, rod, &scene->notes);
   m.finish();
   entries->push_back(std::move(entry));
 }

@@ -393,4 +393,30 @@ double state_critical_time_step(const Rod& rod) {
   return state < rest * (1.0 - 1e-9) ? state : rest;
 }
 
+double lifting_inertia_scale(const Rod& rod) {
+  Rod r = rod;
+  r.set_rotational_inertia_scale(1.0);
+  const StabilityEstimate e1 = estimate_stability(r);
+  double target = std::min(e1.stretch, e1.twist);
+  if (!(e1.bending < 0.99 * target)) return 1.0;
+  // Very heavy tilts leave the penalty acting on the nodes alone: what no scale can lift.
+  r.set_rotational_inertia_scale(1e12);
+  target = std::min(target, estimate_stability(r).bending);
+  // While the tilts' penalty mode limits, the bending-shear step grows as sqrt(scale): a
+  // fixed-point iteration on that law, then a bisection in log(scale) for the smallest scale.
+  double lo = 1.0, hi = 1.0, step = e1.bending;
+  for (int it = 0; it < 60 && step < 0.99 * target; ++it) {
+    lo = hi;
+    hi = std::min(1e12, hi * std::max(1.01, std::pow(0.99 * target / step, 2)));
+    r.set_rotational_inertia_scale(hi);
+    step = estimate_stability(r).bending;
+  }
+  for (int it = 0; it < 30 && hi > lo * 1.001; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    r.set_rotational_inertia_scale(mid);
+    (estimate_stability(r).bending < 0.99 * target ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 }  // namespace corde

@@ -179,6 +179,9 @@ inline Rod make_cantilever(const StepCase& c) {
     fix.origin = rod.orientations()[0];
     rod.add_segment_drive(fix);
   }
+  // rotational_inertia_scale: auto for the scaled method (after the clamp, which it reads).
+  if (c.method == charts::Method::kSplitRotationScaled)
+    rod.set_rotational_inertia_scale(lifting_inertia_scale(rod));
   Load load;
   load.index = c.elements;
   load.value = Vec3(0.0, 0.0, -c.alpha * rod.section().bend);  // L = 1

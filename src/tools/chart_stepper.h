@@ -14,7 +14,9 @@ namespace charts {
 
 constexpr double kPi = 3.14159265358979323846;
 
-enum class Method { kSemiImplicitEuler, kSplitRotation, kImplicitEuler };
+// kSplitRotationScaled: split_rotation on a rod whose tilt inertia is scaled by
+// lifting_inertia_scale() (rotational_inertia_scale: auto; docs/model.md). Work-precision only.
+enum class Method { kSemiImplicitEuler, kSplitRotation, kImplicitEuler, kSplitRotationScaled };
 constexpr Method kMethods[] = {Method::kSemiImplicitEuler, Method::kSplitRotation,
                                Method::kImplicitEuler};
 
@@ -26,6 +28,8 @@ inline const char* method_name(Method m) {
       return "split_rotation";
     case Method::kImplicitEuler:
       return "implicit_euler";
+    case Method::kSplitRotationScaled:
+      return "split_rotation_scaled";
   }
   return "unknown";
 }

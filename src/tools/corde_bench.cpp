@@ -21,6 +21,10 @@
 // BM_GripperSweep (config/scenes/gripper_sweep.yaml, a link sweeping through a hanging cable at
 // 1 m/s: the whole run per iteration, its time per World::step and real-time factor).
 //
+// BM_SagFrame/N/scaled: one 2 ms frame of the self-weight cantilever of docs/charts.md (a) with
+// split_rotation at 0.9 of its stable step, physical tilt inertia (0) or
+// rotational_inertia_scale: auto (1), for the option's gain in the same run.
+//
 // BM_GuardOverhead/guard: the stability guard's cost on config/scenes/default.yaml softened and run
 // explicitly (40 elements, its gripper held), 0.2 s per iteration of bare World::step (0) or
 // through the guard (1): us_per_step (thread CPU time), for the ratio in the same run.
@@ -164,6 +168,42 @@ void BM_ComputeForces(benchmark::State& state) {
   }
   report(state, n, std::chrono::steady_clock::now() - start);
 }
+
+// One 2 ms frame of the peers' self-weight cantilever (docs/charts.md (a): L = 1, r = 1 cm,
+// rho = 1000, E = E_s = 1e7, G = E/3, kappa = G A, ghost clamp, w = 5) with split_rotation at 0.9
+// of its stable step, arg 1: physical inertia (0) or rotational_inertia_scale: auto (1). The same
+// N in the same run gives the option's gain; the rod swings on from its first 0.1 s of sag.
+void BM_SagFrame(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  corde::Material m;
+  m.youngs_modulus = m.stretch_modulus = 1e7;
+  m.shear_modulus = 1e7 / 3.0;
+  m.density = 1000.0;
+  m.kappa = m.shear_modulus * 3.14159265358979 * 1e-4;
+  corde::RodSpec spec;
+  spec.elements = n;
+  spec.shape.length = 1.0;
+  spec.section = corde::make_section(m, 0.01);
+  Rod rod = corde::build_rod(spec);
+  rod.add_node_drive(corde::NodeDrive{});
+  rod.ghost_start().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  if (state.range(1) == 1) rod.set_rotational_inertia_scale(corde::lifting_inertia_scale(rod));
+  const Vec3 g(0.0, 0.0, -5.0 * spec.section.bend / spec.section.mass_per_length);
+  const int steps = static_cast<int>(std::ceil(2e-3 / (0.9 * corde::critical_time_step(rod))));
+  const double h = 2e-3 / steps;
+  double t = 0.0;
+  for (; t < 0.1; t += h) rod.step(t, h, g);
+  for (auto _ : state) {
+    for (int k = 0; k < steps; ++k, t += h) rod.step(t, h, g);
+    benchmark::DoNotOptimize(rod.positions().data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["steps_per_frame"] = steps;
+  state.counters["scale"] = rod.rotational_inertia_scale();
+  if (!rod.finite()) state.SkipWithError("the rod blew up (non-finite state)");
+}
+BENCHMARK(BM_SagFrame)->ArgsProduct({{10, 12, 24, 46}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 BENCHMARK(BM_RodStep)->Arg(50)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RodStepSemiImplicitEuler)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);

@@ -14,18 +14,20 @@ namespace charts {
 namespace {
 
 const char* kUsage =
-    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping]\n"
+    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping|sag]\n"
     "  --short    a few coarse points of every chart (seconds; the test runs it)\n"
-    "  --only L   only these charts (default all)\n"
+    "  --only L   only these charts (default all); sag: only scene (a) of work\n"
     "  --out DIR  folder for work_precision.csv, stability_map.csv, scaling.csv, damping.csv\n"
     "             (default docs/charts)\n";
 
 struct Plan {
   bool full = true;
   std::vector<int> sag_n, v8_n, cable_n, map_n, scale_n;
+  // split_rotation with rotational_inertia_scale: auto (at 0.9 of its step only).
+  std::vector<int> sag_scaled_n, cable_scaled_n;
   std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, youngs, h_omega;
   std::vector<int> modes;
-  int damping_n = 40, cable_ref_n = 320;
+  int damping_n = 40, cable_ref_n = 320, sag_repeats = 5;
   double sag_duration = 0.5, v8_periods = 5.0, cable_duration = 0.5, scale_cpu = 0.2;
   long map_steps_explicit = 1000, map_steps_implicit = 200;
   int map_iterations = 6;
@@ -38,6 +40,9 @@ Plan make_plan(bool full) {
     p.sag_n = {10, 20, 40, 80, 160};
     p.v8_n = {10, 20, 40, 80};
     p.cable_n = {10, 20, 40, 80, 160};
+    p.sag_scaled_n = {6,  8,  10, 11, 12, 13, 14, 16, 18, 20, 22, 23, 24,
+                      28, 32, 40, 44, 46, 48, 56, 64, 80, 92, 96, 160};
+    p.cable_scaled_n = {10, 20, 40, 80, 160};
     p.map_n = {10, 40, 160};
     p.scale_n = {10, 30, 100, 300, 1000, 3000, 10000};
     p.explicit_fractions = {0.9, 0.45};
@@ -48,7 +53,7 @@ Plan make_plan(bool full) {
     p.h_omega = {0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0};
     p.modes = {1, 3};
   } else {
-    p.sag_n = p.v8_n = p.cable_n = p.map_n = {10};
+    p.sag_n = p.v8_n = p.cable_n = p.map_n = p.sag_scaled_n = p.cable_scaled_n = {10};
     p.scale_n = {10, 100};
     p.explicit_fractions = {0.9};
     p.sag_h = p.v8_h = p.cable_h = {2e-3};
@@ -57,6 +62,7 @@ Plan make_plan(bool full) {
     p.modes = {1};
     p.damping_n = 10;
     p.cable_ref_n = 20;
+    p.sag_repeats = 1;
     p.sag_duration = 0.02;
     p.v8_periods = 0.2;
     p.cable_duration = 0.02;
@@ -87,6 +93,18 @@ void row(FILE* f, const char* scene, Method m, int n, const WorkPoint& p) {
                method_name(m), n, p.h, p.cpu_per_frame_us, p.error);
 }
 
+// The scale `auto` chose and the steps it gives (stderr only: the CSV's h has the step).
+void log_scale(const char* scene, int n, const Rod& rod) {
+  Rod physical = rod;
+  physical.set_rotational_inertia_scale(1.0);
+  const StabilityEstimate e = estimate_stability(rod);
+  std::fprintf(stderr,
+               "%-6s N=%-4d rotational_inertia_scale auto = %.4g: step %.3g s (%s), "
+               "physical %.3g s\n",
+               scene, n, rod.rotational_inertia_scale(), e.time_step, e.limiting.c_str(),
+               critical_time_step(physical));
+}
+
 // The steps each method runs a scene at: explicit methods at fractions of the critical step
 // (rounded down to whole steps per `frame` when frame > 0), the implicit one at fixed steps.
 std::vector<double> steps_for(Method m, const Rod& rod, const Plan& plan,
@@ -94,12 +112,13 @@ std::vector<double> steps_for(Method m, const Rod& rod, const Plan& plan,
   if (!is_explicit(m)) return implicit_h;
   std::vector<double> hs;
   const double crit = critical_time_step(rod);
-  for (double f : plan.explicit_fractions)
+  const std::vector<double> scaled = {0.9};
+  for (double f : m == Method::kSplitRotationScaled ? scaled : plan.explicit_fractions)
     hs.push_back(frame > 0.0 ? frame / std::ceil(frame / (f * crit)) : f * crit);
   return hs;
 }
 
-bool work_precision(const Plan& plan, const std::string& dir) {
+bool work_precision(const Plan& plan, const std::string& dir, bool sag_only) {
   FILE* f = open_csv(dir, "work_precision.csv",
                      "scene,method,elements,h,cpu_per_frame_us,error,newton_per_step,failures");
   if (!f) return false;
@@ -108,11 +127,24 @@ bool work_precision(const Plan& plan, const std::string& dir) {
   for (Method m : kMethods)
     for (int n : plan.sag_n)
       for (double h : steps_for(m, SagScene::rod(n), plan, plan.sag_h, 0.0))
-        row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref));
-  for (Method m : kMethods)
+        row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref, plan.sag_repeats));
+  const Method scaled = Method::kSplitRotationScaled;
+  for (int n : plan.sag_scaled_n) {
+    const Rod rod = SagScene::rod(n, scaled);
+    log_scale("sag", n, rod);
+    for (double h : steps_for(scaled, rod, plan, {}, 0.0))
+      row(f, "sag", scaled, n, sag_point(scaled, n, h, plan.sag_duration, ref, plan.sag_repeats));
+  }
+  if (sag_only) {
+    std::fclose(f);
+    return true;
+  }
+  for (Method m : {Method::kSemiImplicitEuler, Method::kSplitRotation, Method::kImplicitEuler,
+                   Method::kSplitRotationScaled})
     for (int n : plan.v8_n) {
       v8::StepCase c;
       c.elements = n;
+      c.method = m;
       for (double h : steps_for(m, v8::make_cantilever(c), plan, plan.v8_h, 0.0))
         row(f, "v8", m, n, v8_point(m, n, h, plan.v8_periods));
     }
@@ -125,14 +157,21 @@ bool work_precision(const Plan& plan, const std::string& dir) {
       cable_tips(Method::kSplitRotation, nr, hr, plan.cable_duration, &rp);
   std::fprintf(stderr, "cable reference: N = %d, h = %.3g, %.1f us/frame\n", nr, hr,
                rp.cpu_per_frame_us);
+  auto cable_row = [&](Method m, int n, double h) {
+    WorkPoint p;
+    const std::vector<Vec3> tips = cable_tips(m, n, h, plan.cable_duration, &p);
+    if (std::isfinite(p.error)) p.error = tip_history_error(tips, ref_tips);
+    row(f, "cable", m, n, p);
+  };
   for (Method m : kMethods)
     for (int n : plan.cable_n)
-      for (double h : steps_for(m, CableScene::rod(n), plan, plan.cable_h, kCableFrame)) {
-        WorkPoint p;
-        const std::vector<Vec3> tips = cable_tips(m, n, h, plan.cable_duration, &p);
-        if (std::isfinite(p.error)) p.error = tip_history_error(tips, ref_tips);
-        row(f, "cable", m, n, p);
-      }
+      for (double h : steps_for(m, CableScene::rod(n), plan, plan.cable_h, kCableFrame))
+        cable_row(m, n, h);
+  for (int n : plan.cable_scaled_n) {
+    const Rod rod = CableScene::rod(n, scaled);
+    log_scale("cable", n, rod);
+    for (double h : steps_for(scaled, rod, plan, {}, kCableFrame)) cable_row(scaled, n, h);
+  }
   std::fclose(f);
   return true;
 }
@@ -237,8 +276,9 @@ int main(int argc, char** argv) {
   }
   const Plan plan = make_plan(full);
   auto want = [&](const char* name) { return only.find(name) != std::string::npos; };
-  const bool ok =
-      (!want("work") || work_precision(plan, dir)) && (!want("map") || stability_map(plan, dir)) &&
-      (!want("scaling") || scaling(plan, dir)) && (!want("damping") || damping(plan, dir));
+  const bool ok = (!(want("work") || want("sag")) || work_precision(plan, dir, !want("work"))) &&
+                  (!want("map") || stability_map(plan, dir)) &&
+                  (!want("scaling") || scaling(plan, dir)) &&
+                  (!want("damping") || damping(plan, dir));
   return ok ? 0 : 1;
 }

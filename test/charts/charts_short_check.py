@@ -13,7 +13,7 @@ import subprocess
 import sys
 import tempfile
 
-METHODS = {"semi_implicit_euler", "split_rotation", "implicit_euler"}
+METHODS = {"semi_implicit_euler", "split_rotation", "implicit_euler", "split_rotation_scaled"}
 COLUMNS = {
     "work_precision.csv": ["scene", "method", "elements", "h", "cpu_per_frame_us", "error",
                            "newton_per_step", "failures"],
@@ -24,8 +24,9 @@ COLUMNS = {
                     "factor_per_step", "theory_per_step", "decay_per_period",
                     "theory_decay_per_period", "damping_ratio", "theory_damping_ratio"],
 }
-# --short: 3 scenes x 3 methods, 3 methods x 2 moduli, 3 methods x 2 N, 2 implicit + 1 explicit.
-ROWS = {"work_precision.csv": 9, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 3}
+# --short: 3 scenes x 4 methods (split_rotation_scaled included), 3 methods x 2 moduli,
+# 3 methods x 2 N, 2 implicit + 1 explicit.
+ROWS = {"work_precision.csv": 12, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 3}
 
 failures = []
 
