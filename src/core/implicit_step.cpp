@@ -100,7 +100,7 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
       const Vec3 d = x0_[s + 1] - x0_[s];
       const double len = d.norm();
       tangent_[s] = len > 0.0 ? Vec3(d / len) : Vec3::Zero();
-      chord0_[s] = len;
+      chord0_[s] = tangent_[s].dot(xt_[s + 1] - xt_[s]);  // len for backward Euler
     }
   }
   if (friction_r_) {
@@ -169,13 +169,14 @@ double ImplicitEuler::merit(const Rod& rod, const RodSystem& sys, double h) cons
     const double gr = rod.section().gamma_r;
     const auto& rest = rod.rest_lengths();
     for (int j = 0; j + 1 < ns; ++j) {
-      const Vec3 dw = rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j];
+      const Vec3 dw =
+          rot0_[j + 1] * (theta_[j + 1] + off_[j + 1]) - rot0_[j] * (theta_[j] + off_[j]);
       phi += 0.5 * inv_h * gr / (0.5 * (rest[j] + rest[j + 1])) * dw.squaredNorm();
     }
   }
   if (drag_on_)
     for (int i = 0; i < nn; ++i) {
-      const Vec3 dx = x[i] - x0_[i];
+      const Vec3 dx = x[i] - xt_[i];
       phi += 0.5 * inv_h * dx.dot(drag_[i] * dx);
     }
   for (const auto& [i, f] : forces_) phi -= f.dot(x[i]);
@@ -205,7 +206,7 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
   }
   if (drag_on_)
     for (int i = 0; i < nn; ++i)
-      g->segment<3>(RodSystem::node_index(i)) += inv_h * (drag_[i] * (x[i] - x0_[i]));
+      g->segment<3>(RodSystem::node_index(i)) += inv_h * (drag_[i] * (x[i] - xt_[i]));
   for (const auto& [i, f] : forces_) g->segment<3>(RodSystem::node_index(i)) -= f;
   // Per segment, the gradient with respect to its total rotation theta, then mapped to the
   // increment at the current iterate.
@@ -216,8 +217,9 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
     const double gr = rod.section().gamma_r;
     const auto& rest = rod.rest_lengths();
     for (int j = 0; j + 1 < ns; ++j) {
-      const Vec3 dw = (inv_h * gr / (0.5 * (rest[j] + rest[j + 1]))) *
-                      (rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j]);
+      const Vec3 dw =
+          (inv_h * gr / (0.5 * (rest[j] + rest[j + 1]))) *
+          (rot0_[j + 1] * (theta_[j + 1] + off_[j + 1]) - rot0_[j] * (theta_[j] + off_[j]));
       gth_[j + 1] += rot0_[j + 1].transpose() * dw;
       gth_[j] -= rot0_[j].transpose() * dw;
     }
@@ -289,6 +291,24 @@ void ImplicitEuler::record_reactions(Rod& rod) {
   }
 }
 
+void ImplicitEuler::remember_end(const Rod& rod) {
+  xe_ = rod.positions();
+  qe_ = rod.orientations();
+  ve_ = rod.velocities();
+  we_ = rod.angular_velocities();
+}
+
+bool ImplicitEuler::history_usable(const Rod& rod, double h) const {
+  if (!have_history_ || h != h_last_ || drives_ != drives_last_) return false;
+  if (rod.positions() != xe_ || rod.velocities() != ve_ || rod.angular_velocities() != we_)
+    return false;
+  const auto& q = rod.orientations();
+  if (q.size() != qe_.size()) return false;
+  for (size_t s = 0; s < q.size(); ++s)
+    if (q[s].coeffs() != qe_[s].coeffs()) return false;
+  return true;
+}
+
 ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
                                    const std::vector<Vec3>* predicted) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
@@ -296,18 +316,49 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   auto& q = rod.orientations();
   auto& v = rod.velocities();
   auto& w = rod.angular_velocities();
+  // The drives' items and kinds: a grasp taken or let go restarts BDF2.
+  drives_.clear();
+  for (const NodeDrive& d : rod.node_drives())
+    drives_.push_back(4 * d.node + static_cast<int>(d.kind));
+  for (const SegmentDrive& d : rod.segment_drives())
+    drives_.push_back(-4 * d.segment - 1 - static_cast<int>(d.kind));
+  // BDF2 needs the last step's start state as x^{n-1}; without a usable history (first step,
+  // new h, a state changed from outside: reset, configure, the guard's rollback, a teleport)
+  // this step is one backward-Euler step, from which BDF2 starts.
+  const bool second = bdf2_ && history_usable(rod, h);
+  used_bdf2_ = second;
+  if (second) {
+    xp_.swap(x0_);
+    qp_.swap(q0_);
+    vp_.swap(v0_);
+    wp_.swap(w0_);
+  }
   x0_ = x;
   q0_ = q;
   v0_ = v;
+  w0_ = w;
+  beta_ = second ? 2.0 * h / 3.0 : h;
+  xt_.resize(nn);
+  off_.resize(ns);
   xhat_.resize(nn);
   what_.resize(ns);
   theta_.resize(ns);
-  for (int i = 0; i < nn; ++i) xhat_[i] = x[i] + h * v[i];
-  for (int s = 0; s < ns; ++s) what_[s] = h * w[s];
+  for (int i = 0; i < nn; ++i) {
+    xt_[i] = second ? Vec3((4.0 * x[i] - xp_[i]) / 3.0) : x[i];
+    const Vec3 vt = second ? Vec3((4.0 * v[i] - vp_[i]) / 3.0) : v[i];
+    xhat_[i] = xt_[i] + beta_ * vt;
+  }
+  for (int s = 0; s < ns; ++s) {
+    off_[s] = second ? Vec3(log_body(q0_[s].conjugate() * qp_[s]) / 3.0) : Vec3::Zero();
+    const Vec3 wt = second ? Vec3((4.0 * w[s] - wp_[s]) / 3.0) : w[s];
+    what_[s] = beta_ * wt - off_[s];
+  }
   factored_ = false;
+  const double hs = h;  // the world's step (drives, loads and the new time use it)
+  h = beta_;            // the step the minimisation takes
 
   // Predictor: free items move on with their velocities; supports are set or projected.
-  const double t1 = t + h;
+  const double t1 = t + hs;
   for (int i = 0; i < nn; ++i) x[i] = xhat_[i];
   for (int s = 0; s < ns; ++s) q[s] = (q0_[s] * exp_body(what_[s])).normalized();
   setup_supports(rod, t1);
@@ -422,8 +473,8 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   g_trial_.swap(g_);
   record_reactions(rod);
   g_trial_.swap(g_);
-  for (int i = 0; i < nn; ++i) v[i] = (x[i] - x0_[i]) / h;
-  for (int s = 0; s < ns; ++s) w[s] = theta_[s] / h;
+  for (int i = 0; i < nn; ++i) v[i] = (x[i] - xt_[i]) / h;
+  for (int s = 0; s < ns; ++s) w[s] = (theta_[s] + off_[s]) / h;
   // Drives give their own velocities (as Rod::step's drives do).
   for (const NodeDrive& d : rod.node_drives())
     if (d.kind != NodeDrive::Kind::kTarget) drive_position(d, t1, &v[d.node]);
@@ -437,21 +488,28 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   q_free_ = q;
   v_free_ = v;
   w_free_ = w;
+  have_history_ = bdf2_;
+  if (bdf2_) {
+    h_last_ = hs;
+    drives_last_ = drives_;
+    remember_end(rod);
+  }
   return res;
 }
 
-bool ImplicitEuler::ensure_factor(const Rod& rod, double h) {
+bool ImplicitEuler::ensure_factor(const Rod& rod) {
   if (factored_) return true;
   // Converged without a Newton iteration: factor at the result.
   RodSystem sys{&rod, Vec3::Zero(), 0.0};
   sys.definite = true;
   sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;
-  assemble(rod, sys, h);
+  assemble(rod, sys, beta_);
   factored_ = solver_.factor(a_);
   return factored_;
 }
 
-void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) {
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses) {
+  const double h = beta_;
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
@@ -462,17 +520,19 @@ void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) 
   project_gradient(&z_);
 }
 
-void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses, double h,
+void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
                              std::vector<Vec3>* dv) {
   const int nn = rod.num_nodes();
+  const double h = beta_;
   dv->assign(nn, Vec3::Zero());
-  if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
+  if (!ensure_factor(rod)) return;
+  solve_impulses(impulses);
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
-void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double h) {
+void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const double h = beta_;
   auto& x = rod.positions();
   auto& q = rod.orientations();
   auto& v = rod.velocities();
@@ -481,18 +541,20 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double 
   q = q_free_;
   v = v_free_;
   w = w_free_;
-  if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
-  for (int i = 0; i < nn; ++i) {
-    if (kind_[2 * i] == 1) continue;
-    x[i] += z_.segment<3>(6 * i);
-    v[i] = (x[i] - x0_[i]) / h;
+  if (ensure_factor(rod)) {
+    solve_impulses(impulses);
+    for (int i = 0; i < nn; ++i) {
+      if (kind_[2 * i] == 1) continue;
+      x[i] += z_.segment<3>(6 * i);
+      v[i] = (x[i] - xt_[i]) / h;
+    }
+    for (int s = 0; s < ns; ++s) {
+      if (kind_[2 * s + 1] == 1) continue;
+      q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
+      w[s] = (log_body(q0_[s].conjugate() * q[s]) + off_[s]) / h;
+    }
   }
-  for (int s = 0; s < ns; ++s) {
-    if (kind_[2 * s + 1] == 1) continue;
-    q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
-    w[s] = log_body(q0_[s].conjugate() * q[s]) / h;
-  }
+  if (bdf2_) remember_end(rod);
 }
 
 }  // namespace corde
