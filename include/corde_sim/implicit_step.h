@@ -34,7 +34,9 @@
 // written in local coordinates about the current orientation q^n: theta = log(q^n^-1 q^{n+1})
 // and xi = log(q^n^-1 q^{n-1}) (body frame of q^n), theta + xi/3 = b w^{n+1}, and the body
 // angular velocities combine as the node velocities (Euler's equations are in body components).
-// Dissipation takes the BDF2 rates (x - x~)/b and (theta + xi/3)/b. The mapping of the
+// Dissipation takes the BDF2 rates (x - x~)/b and (theta + xi/3)/b; the directions, drag
+// coefficients and follower loads held over the step are taken at the state extrapolated to
+// t + h (2 y^n - y^{n-1}), not at the start (which would cost an order). The mapping of the
 // rotational inertia term to the rotation increment (the J_r^-T factor, also in backward Euler)
 // leaves an O(h) error on it whose size is the rotational inertia's share of the motion,
 // I w x dw/dt; for rods (I of order m r^2) it is far below the second-order error.
@@ -123,6 +125,8 @@ class ImplicitEuler {
   // The origin of the step's node velocities, v = (x - xt_) / beta_ (x^n, or BDF2's x~), and per
   // segment the offset of its rotation, b w = theta + off_ (0, or xi / 3).
   std::vector<Vec3> xt_, off_;
+  std::vector<Vec3> xx_, vx_;  // BDF2: positions and velocities extrapolated to the step's end
+  std::vector<Quat> qx_;       // and orientations
   // History for BDF2: the last step's start state and h, and the state it left the rod in (the
   // next step uses the history only from exactly that state), and its drives.
   bool have_history_ = false;

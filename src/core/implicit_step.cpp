@@ -93,11 +93,16 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
   friction_t_ = sec.gamma_t > 0.0;
   friction_r_ = sec.gamma_r > 0.0 && ns > 1;
   drag_on_ = rod.drag().active();
+  // Directions and drag coefficients: at the step's start for backward Euler (first order), at
+  // the state extrapolated to the step's end for BDF2 (frozen at the start they would leave an
+  // O(h) error in the forces, which makes the step first order).
+  const std::vector<Vec3>& xd = used_bdf2_ ? xx_ : x0_;
+  const std::vector<Vec3>& vd = used_bdf2_ ? vx_ : v0_;
   if (friction_t_ || drag_on_) {
     tangent_.resize(ns);
     chord0_.resize(ns);
     for (int s = 0; s < ns; ++s) {
-      const Vec3 d = x0_[s + 1] - x0_[s];
+      const Vec3 d = xd[s + 1] - xd[s];
       const double len = d.norm();
       tangent_[s] = len > 0.0 ? Vec3(d / len) : Vec3::Zero();
       chord0_[s] = tangent_[s].dot(xt_[s + 1] - xt_[s]);  // len for backward Euler
@@ -114,10 +119,10 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
     const double inv_mu = 1.0 / sec.mass_per_length;
     drag_.resize(nn);
     for (int i = 0; i < nn; ++i) {
-      const Vec3 chord = x0_[std::min(i + 1, ns)] - x0_[std::max(i - 1, 0)];
+      const Vec3 chord = xd[std::min(i + 1, ns)] - xd[std::max(i - 1, 0)];
       const double len = chord.norm();
       const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
-      const Vec3& v = v0_[i];
+      const Vec3& v = vd[i];
       const Vec3 vt = v.dot(t) * t, vn = v - vt;
       const double cn = dr.linear_normal + dr.quadratic_normal * vn.norm();
       const double ct = dr.linear_tangential + dr.quadratic_tangential * vt.norm();
@@ -135,8 +140,11 @@ void ImplicitEuler::setup_loads(const Rod& rod, double t1) {
     const double f = l.scale(t1);
     if (f == 0.0) continue;
     Vec3 value = f * l.value;
-    if (l.follower)
-      value = q0_[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] * value;
+    if (l.follower)  // turned with the segment at the start (BDF2: extrapolated to the end)
+      value =
+          (used_bdf2_ ? qx_
+                      : q0_)[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] *
+          value;
     (l.kind == Load::Kind::kForce ? forces_ : torques_).push_back({l.index, value});
   }
   if (rod.has_external()) {
@@ -352,6 +360,16 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     off_[s] = second ? Vec3(log_body(q0_[s].conjugate() * qp_[s]) / 3.0) : Vec3::Zero();
     const Vec3 wt = second ? Vec3((4.0 * w[s] - wp_[s]) / 3.0) : w[s];
     what_[s] = beta_ * wt - off_[s];
+  }
+  if (second) {  // linear extrapolation to t + h, for the directions held over the step
+    xx_.resize(nn);
+    vx_.resize(nn);
+    qx_.resize(ns);
+    for (int i = 0; i < nn; ++i) {
+      xx_[i] = 2.0 * x[i] - xp_[i];
+      vx_[i] = 2.0 * v[i] - vp_[i];
+    }
+    for (int s = 0; s < ns; ++s) qx_[s] = (q0_[s] * exp_body(-3.0 * off_[s])).normalized();
   }
   factored_ = false;
   const double hs = h;  // the world's step (drives, loads and the new time use it)

@@ -23,7 +23,7 @@ const char* kUsage =
 struct Plan {
   bool full = true;
   std::vector<int> sag_n, v8_n, cable_n, map_n, scale_n;
-  std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, youngs, h_omega;
+  std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, cable_h_bdf2, youngs, h_omega;
   std::vector<int> modes;
   int damping_n = 40, cable_ref_n = 320;
   double sag_duration = 0.5, v8_periods = 5.0, cable_duration = 0.5, scale_cpu = 0.2;
@@ -44,6 +44,7 @@ Plan make_plan(bool full) {
     p.sag_h = {2e-3, 1e-3, 5e-4};
     p.v8_h = {1e-2, 5e-3, 2e-3, 1e-3, 5e-4};
     p.cable_h = {1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4};
+    p.cable_h_bdf2 = {1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2.5e-4};
     p.youngs = {1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 2e11};
     p.h_omega = {0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0};
     p.modes = {1, 3};
@@ -51,7 +52,7 @@ Plan make_plan(bool full) {
     p.sag_n = p.v8_n = p.cable_n = p.map_n = {10};
     p.scale_n = {10, 100};
     p.explicit_fractions = {0.9};
-    p.sag_h = p.v8_h = p.cable_h = {2e-3};
+    p.sag_h = p.v8_h = p.cable_h = p.cable_h_bdf2 = {2e-3};
     p.youngs = {1e6, 2e11};
     p.h_omega = {0.1, 1.0};
     p.modes = {1};
@@ -105,11 +106,11 @@ bool work_precision(const Plan& plan, const std::string& dir) {
   if (!f) return false;
   const SagElastica::Tip ref = SagScene::reference();
   std::fprintf(stderr, "sag reference tip: x %.6f z %.6f angle %.6f\n", ref.x, ref.z, ref.angle);
-  for (Method m : kMethods)
+  for (Method m : kWorkMethods)
     for (int n : plan.sag_n)
       for (double h : steps_for(m, SagScene::rod(n), plan, plan.sag_h, 0.0))
         row(f, "sag", m, n, sag_point(m, n, h, plan.sag_duration, ref));
-  for (Method m : kMethods)
+  for (Method m : kWorkMethods)
     for (int n : plan.v8_n) {
       v8::StepCase c;
       c.elements = n;
@@ -125,9 +126,11 @@ bool work_precision(const Plan& plan, const std::string& dir) {
       cable_tips(Method::kSplitRotation, nr, hr, plan.cable_duration, &rp);
   std::fprintf(stderr, "cable reference: N = %d, h = %.3g, %.1f us/frame\n", nr, hr,
                rp.cpu_per_frame_us);
-  for (Method m : kMethods)
+  for (Method m : kWorkMethods)
     for (int n : plan.cable_n)
-      for (double h : steps_for(m, CableScene::rod(n), plan, plan.cable_h, kCableFrame)) {
+      for (double h :
+           steps_for(m, CableScene::rod(n), plan,
+                     m == Method::kBdf2 ? plan.cable_h_bdf2 : plan.cable_h, kCableFrame)) {
         WorkPoint p;
         const std::vector<Vec3> tips = cable_tips(m, n, h, plan.cable_duration, &p);
         if (std::isfinite(p.error)) p.error = tip_history_error(tips, ref_tips);
@@ -181,7 +184,8 @@ bool damping(const Plan& plan, const std::string& dir) {
   const int n = plan.damping_n;
   for (int mode : plan.modes) {
     std::vector<std::pair<Method, double>> runs;
-    for (double x : plan.h_omega) runs.push_back({Method::kImplicitEuler, x});
+    for (Method m : {Method::kImplicitEuler, Method::kBdf2})
+      for (double x : plan.h_omega) runs.push_back({m, x});
     // The explicit reference point: split_rotation at 0.9 of its critical step.
     {
       Rod r = fixed_start_rod(rod_material(1e7, 1000.0, 0.01), 0.01, 1.0, n, true);
