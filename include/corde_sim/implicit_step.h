@@ -42,8 +42,9 @@
 // I w x dw/dt; for rods (I of order m r^2) it is far below the second-order error.
 // Without a usable history the step is one backward-Euler step: the first step, a different h,
 // a different number of nodes, a change of the drives (a grasp taken or let go), and any state
-// not exactly the one the last step left (a reset, a configure, the guard's rollback, a state
-// set from outside); BDF2 then starts from that step.
+// not exactly the one the last step left (a reset, a configure, a state set from outside; the
+// guard's rollback restores the snapshot's history, and its retry at half the step restarts);
+// BDF2 then starts from that step.
 #pragma once
 
 #include <vector>
@@ -145,7 +146,7 @@ class ImplicitEuler {
   // Dissipation frozen at the step's start.
   std::vector<Vec3> tangent_;   // per segment: unit chord
   std::vector<double> chord0_;  // per segment: t . (xt_{s+1} - xt_s)
-  std::vector<Mat3> rot0_;      // per segment: R^n
+  std::vector<Mat3> rot0_;      // per segment: R^n (BDF2: R_p J_r(theta_p), see step())
   std::vector<Mat3> drag_;      // per node: drag matrix D_i (N s / m)
   bool friction_t_ = false, friction_r_ = false, drag_on_ = false;
   // Loads held over the step (world): forces on nodes, torques on segments.

@@ -33,6 +33,17 @@ Vec3 inv_right_jacobian_t(const Vec3& theta, const Vec3& y) {
   return y - 0.5 * theta.cross(y) + c * theta.cross(theta.cross(y));
 }
 
+// J_r(theta), the right Jacobian of exp: exp(theta + d) = exp(theta) exp(J_r(theta) d) to first
+// order in d.
+Mat3 right_jacobian(const Vec3& theta) {
+  const double a = theta.norm();
+  const double c1 = a < 1e-4 ? 0.5 - a * a / 24.0 : (1.0 - std::cos(a)) / (a * a);
+  const double c2 = a < 1e-4 ? 1.0 / 6.0 - a * a / 120.0 : (a - std::sin(a)) / (a * a * a);
+  Mat3 k;
+  k << 0.0, -theta.z(), theta.y(), theta.z(), 0.0, -theta.x(), -theta.y(), theta.x(), 0.0;
+  return Mat3::Identity() - c1 * k + c2 * k * k;
+}
+
 // Restricts unknown u (3 components at 3u) of a to the directions of the projector p: rows and
 // columns multiplied by p, the complement (I - p) on the diagonal, so that the solution's
 // component lies in p's range and the matrix stays positive definite.
@@ -107,10 +118,6 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
       tangent_[s] = len > 0.0 ? Vec3(d / len) : Vec3::Zero();
       chord0_[s] = tangent_[s].dot(xt_[s + 1] - xt_[s]);  // len for backward Euler
     }
-  }
-  if (friction_r_) {
-    rot0_.resize(ns);
-    for (int s = 0; s < ns; ++s) rot0_[s] = q0_[s].toRotationMatrix();
   }
   if (drag_on_) {
     // As Rod::drag_block: per node the chord across it, the length it stands for (its mass over
@@ -190,7 +197,7 @@ double ImplicitEuler::merit(const Rod& rod, const RodSystem& sys, double h) cons
   for (const auto& [i, f] : forces_) phi -= f.dot(x[i]);
   // Torques have no potential on the rotations; their work along the step's rotation (as
   // statics takes it) keeps Phi consistent with the gradient.
-  for (const auto& [s, tq] : torques_) phi -= tq.dot(q0_[s] * theta_[s]);
+  for (const auto& [s, tq] : torques_) phi -= tq.dot(rot0_[s] * theta_[s]);
   return phi;
 }
 
@@ -232,7 +239,7 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
       gth_[j] -= rot0_[j].transpose() * dw;
     }
   }
-  for (const auto& [s, tq] : torques_) gth_[s] -= q0_[s].conjugate() * tq;
+  for (const auto& [s, tq] : torques_) gth_[s] -= rot0_[s].transpose() * tq;
   for (int s = 0; s < ns; ++s)
     g->segment<3>(RodSystem::segment_index(s)) += inv_right_jacobian_t(theta_[s], gth_[s]);
 }
@@ -267,8 +274,8 @@ void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
     for (int j = 0; j + 1 < ns; ++j) {
       const double c = inv_h * gr / (0.5 * (rest[j] + rest[j + 1]));
       const int a = RodSystem::segment_index(j), b = RodSystem::segment_index(j + 1);
-      a_.add(a, a, c * Mat3::Identity());
-      a_.add(b, b, c * Mat3::Identity());
+      a_.add(a, a, c * (rot0_[j].transpose() * rot0_[j]));
+      a_.add(b, b, c * (rot0_[j + 1].transpose() * rot0_[j + 1]));
       a_.add(b, a, -c * (rot0_[j + 1].transpose() * rot0_[j]));
     }
   }
@@ -333,7 +340,14 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   // BDF2 needs the last step's start state as x^{n-1}; without a usable history (first step,
   // new h, a state changed from outside: reset, configure, the guard's rollback, a teleport)
   // this step is one backward-Euler step, from which BDF2 starts.
-  const bool second = bdf2_ && history_usable(rod, h);
+  // Contacts acted on the rod in the last step (their impulses are the prediction): their velocity
+  // jumps are not smooth in time, and BDF2's memory of the positions before them would carry the
+  // motion into the contact (the energy rises), so the step is a backward Euler step. Contacts
+  // are first order in time either way.
+  bool touching = false;
+  if (predicted)
+    for (const Vec3& p : *predicted) touching = touching || !p.isZero();
+  const bool second = bdf2_ && !touching && history_usable(rod, h);
   used_bdf2_ = second;
   if (second) {
     xp_.swap(x0_);
@@ -382,6 +396,15 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   setup_supports(rod, t1);
   for (GhostFrame* gf : {&rod.ghost_start(), &rod.ghost_end()})
     if (gf->active && gf->motion) gf->frame = ghost_frame_at(*gf, t1);
+  // Per segment the map from its rotation over the step to the world, for torques (their work
+  // along the step's rotation) and rotational friction (world angular velocities): R^n for
+  // backward Euler; for BDF2 R_p J_r(theta_p) at the extrapolated rotation theta_p = -xi, so
+  // that after the increment's mapping J_r^-T(theta) they act in the frame of the step's end to
+  // O(h^2) (with R^n they would act in the middle of the step, an O(h) error).
+  rot0_.resize(ns);
+  for (int s = 0; s < ns; ++s)
+    rot0_[s] = second ? Mat3(qx_[s].toRotationMatrix() * right_jacobian(-3.0 * off_[s]))
+                      : Mat3(q0_[s].toRotationMatrix());
   setup_dissipation(rod, h);
   setup_loads(rod, t1);
   predicted_.clear();
