@@ -179,8 +179,8 @@ double bdf2_theory(double hw) {
 // Bending mode 1 of the charts' cantilever (10 elements, ghost clamp, no gravity) started in its
 // mode shape: BDF2's measured amplitude factor per step (after the start-up) is that of the
 // theory within 10% of its loss 1 - |r| (the rest: the start shape is the continuum's mode, not
-// the discrete rod's), at h w = 0.3 and 1; backward Euler's loss at the same h w is 25 and 4
-// times larger.
+// the discrete rod's; measured 3% and 2%), at h w = 0.3 and 1; backward Euler's loss at the
+// same h w is 25 and 4 times larger (checked: at least 4 times).
 TEST(Bdf2, DampsModesAsTheTheorySaysFarLessThanBackwardEuler) {
   for (double hw : {0.3, 1.0}) {
     const charts::DampingPoint p = charts::mode_damping(charts::Method::kBdf2, 10, 1, hw);
