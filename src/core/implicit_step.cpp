@@ -337,9 +337,9 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     drives_.push_back(4 * d.node + static_cast<int>(d.kind));
   for (const SegmentDrive& d : rod.segment_drives())
     drives_.push_back(-4 * d.segment - 1 - static_cast<int>(d.kind));
-  // BDF2 needs the last step's start state as x^{n-1}; without a usable history (first step,
-  // new h, a state changed from outside: reset, configure, the guard's rollback, a teleport)
-  // this step is one backward-Euler step, from which BDF2 starts.
+  // BDF2 needs the last step's start state as x^{n-1}; without a usable history (the first
+  // step, a new h such as the guard's retry at half the step, a state changed from outside: a
+  // reset, a configure, a teleport) this step is one backward-Euler step, from which BDF2 starts.
   // Contacts acted on the rod in the last step (their impulses are the prediction): their velocity
   // jumps are not smooth in time, and BDF2's memory of the positions before them would carry the
   // motion into the contact (the energy rises), so the step is a backward Euler step. Contacts
