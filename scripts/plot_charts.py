@@ -12,10 +12,12 @@ import os
 import sys
 
 COLORS = {"semi_implicit_euler": "tab:blue", "split_rotation": "tab:orange",
-          "implicit_euler": "tab:green", "split_rotation_scaled": "tab:red"}
+          "implicit_euler": "tab:green", "bdf2": "tab:red", "split_rotation_scaled": "tab:purple"}
 METHODS = list(COLORS)
+IMPLICIT = ("implicit_euler", "bdf2")
 # split_rotation_scaled: split_rotation with rotational_inertia_scale: auto (docs/model.md).
-LABELS = {"implicit_euler": "", "split_rotation_scaled": ", tilt inertia scaled (auto), h = 0.9"}
+LABELS = {"implicit_euler": "", "bdf2": "",
+          "split_rotation_scaled": ", tilt inertia scaled (auto), h = 0.9"}
 
 # docs/peers.md, the sagging cantilever (w = 5): (N, tip error / L, CPU per 2 ms frame in us).
 PEERS_SAG = {
@@ -152,7 +154,9 @@ def plot_scaling(plt, rows, path):
     fig, ax = plt.subplots(figsize=(8, 5.8))
     for m in METHODS:
         sel = sorted((r for r in rows if r["method"] == m), key=lambda r: r["elements"])
-        lab = m + (" (h = 1 ms)" if m == "implicit_euler" else " (h = 0.9 of its limit)")
+        if not sel:
+            continue
+        lab = m + (" (h = 1 ms)" if m in IMPLICIT else " (h = 0.9 of its limit)")
         ax.loglog([r["elements"] for r in sel], [r["us_per_step"] for r in sel], "-o",
                   color=COLORS[m], label=lab)
     imp = sorted((r for r in rows if r["method"] == "implicit_euler" and r["newton_per_step"] > 0),
@@ -177,6 +181,13 @@ def plot_scaling(plt, rows, path):
     print(f"wrote {path}")
 
 
+def bdf2_factor(hw):
+    """|principal root| of BDF2 on y' = i w y: (3/2 - i h w) r^2 - 2 r + 1/2 = 0."""
+    a, b, c = complex(1.5, -hw), -2.0, 0.5
+    d = (b * b - 4 * a * c) ** 0.5
+    return max(abs((-b + d) / (2 * a)), abs((-b - d) / (2 * a)))
+
+
 def plot_damping(plt, rows, path):
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.5))
     imp = [r for r in rows if r["method"] == "implicit_euler"]
@@ -196,8 +207,22 @@ def plot_damping(plt, rows, path):
         bx.loglog([r["h_omega"] for r in sel], [r["damping_ratio"] for r in sel], mk,
                   color="tab:green", ms=7, mfc="none" if mode > 1 else "tab:green",
                   label=f"mode {mode}, measured")
+    bdf = sorted((r for r in rows if r["method"] == "bdf2"), key=lambda r: r["h_omega"])
+    if bdf:
+        ax.semilogx(grid, [bdf2_factor(x) for x in grid], "k--", lw=1,
+                    label="BDF2 theory: |principal root| (1 - (h w)^4 / 4 for small h w)")
+        bx.loglog(grid, [-math.log(bdf2_factor(x)) / x for x in grid], "k--", lw=1,
+                  label="BDF2 theory: -ln|root| / (h w) (about (h w)^3 / 4)")
+        for mode, mk in zip(sorted({int(r["mode"]) for r in bdf}), "os^"):
+            sel = [r for r in bdf if int(r["mode"]) == mode]
+            ax.semilogx([r["h_omega"] for r in sel], [r["factor_per_step"] for r in sel], mk,
+                        color=COLORS["bdf2"], ms=7, mfc="none" if mode > 1 else COLORS["bdf2"],
+                        label=f"bdf2, bending mode {mode}, measured")
+            bx.loglog([r["h_omega"] for r in sel], [max(r["damping_ratio"], 1e-12) for r in sel],
+                      mk, color=COLORS["bdf2"], ms=7, mfc="none" if mode > 1 else COLORS["bdf2"],
+                      label=f"bdf2, mode {mode}, measured")
     for r in rows:
-        if r["method"] != "implicit_euler":
+        if r["method"] not in IMPLICIT:
             ax.semilogx([r["h_omega"]], [r["factor_per_step"]], "*", color=COLORS[r["method"]],
                         ms=10, label=f"{r['method']} at 0.9 of its limit, mode {int(r['mode'])}")
     ax.set_xlabel("h * omega (time step times the mode's angular frequency)")
@@ -226,26 +251,43 @@ def targets(d):
                 if r["scene"] == scene and r["method"] == method and math.isfinite(r["error"])]
 
     for r in wp:
-        if (r["scene"] == "cable" and r["method"] == "implicit_euler"
+        if (r["scene"] == "cable" and r["method"] in IMPLICIT
                 and int(r["elements"]) == 40 and abs(r["h"] - 2e-3) < 1e-9):
-            out.append(f"steel cable N=40, implicit, h = 2 ms: {r['cpu_per_frame_us']:.1f} us per "
-                       f"2 ms frame (target <= 100), error {r['error']:.3e} L, "
+            out.append(f"steel cable N=40, {r['method']}, h = 2 ms: {r['cpu_per_frame_us']:.1f} us "
+                       f"per 2 ms frame (target <= 100), error {r['error']:.3e} L, "
                        f"{r['newton_per_step']:.2f} Newton iterations per step")
+    # Explicit against the best implicit method (the cheaper of implicit_euler and bdf2) at each
+    # explicit Pareto point's error, with each implicit method's own cost.
     for scene in ("cable", "v8", "sag"):
         exp = pts(scene, "semi_implicit_euler") + pts(scene, "split_rotation")
-        imp = pts(scene, "implicit_euler")
         for c, e, n, h in pareto(exp):
-            ci = cheapest(imp, e)
-            ratio = f"explicit/implicit = {c / ci:.3g}" if ci < math.inf else "implicit: none"
+            costs = {m: cheapest(pts(scene, m), e) for m in IMPLICIT}
+            best = min(costs, key=costs.get)
+            ci = costs[best]
+            ratio = (f"explicit/implicit = {c / ci:.3g} ({best})" if ci < math.inf
+                     else "implicit: none")
+            each = ", ".join(f"{m} {v:.1f} us" for m, v in costs.items())
             out.append(f"{scene}: explicit N={n} h={h:.3g}: error {e:.3e} at {c:.1f} us; implicit "
-                       f"at <= that error: {ci:.1f} us -> {ratio}")
+                       f"at <= that error: {each} -> {ratio}")
     for scene in ("cable", "sag"):
         exp = pts(scene, "semi_implicit_euler") + pts(scene, "split_rotation")
-        imp = pts(scene, "implicit_euler")
+        imp = pts(scene, "implicit_euler") + pts(scene, "bdf2")
         for c, e, n, h in pareto(pts(scene, "split_rotation_scaled")):
             out.append(f"{scene}: scaled split_rotation N={n} h={h:.3g}: error {e:.3e} at {c:.2f} "
                        f"us; at <= that error: physical explicit {cheapest(exp, e):.1f} us, "
                        f"implicit {cheapest(imp, e):.1f} us")
+    # The stiff-scene target (implicit >= 10x cheaper at equal accuracy) at fixed errors.
+    exp = pts("cable", "semi_implicit_euler") + pts("cable", "split_rotation")
+    for a in (3.7e-3, 9.2e-4, 2.3e-4, 1e-4, 5e-5):
+        ce = cheapest(exp, a)
+        costs = {m: cheapest(pts("cable", m), a) for m in IMPLICIT}
+        best = min(costs, key=costs.get)
+        if ce < math.inf and costs[best] < math.inf:
+            each = ", ".join(f"{m} {v:.1f} us ({ce / v:.3g}x)" if v < math.inf else f"{m} none"
+                             for m, v in costs.items())
+            out.append(f"stiff cable at error <= {a:g} L: explicit {ce:.1f} us; {each}; best "
+                       f"{best}: {ce / costs[best]:.3g}x (target >= 10)")
+    ours = [p for m in METHODS for p in pts("sag", m)]
     peers = [(c, e) for v in PEERS_SAG.values() for (_, e, c) in v]
     # The target read strictly: at each accuracy (the peers' own errors included), the cheapest
     # point of each side with an error <= it.

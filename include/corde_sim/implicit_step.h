@@ -24,6 +24,27 @@
 // Kinematic nodes and segments are set to their drives at t + h and held; line and plane
 // constraints on nodes and axis constraints on segments restrict their increments by
 // projection. Each support records its reaction (the residual force or torque it takes).
+//
+// Second order (BDF2, set_second_order(true); Integrator::kBdf2): the same minimisation with the
+// step h replaced by the effective step b = 2h/3 and the start state by the BDF2 combination of
+// the last two states:
+//   x^{n+1} - x~ = b v^{n+1},   x~ = (4 x^n - x^{n-1}) / 3,
+//   M (v^{n+1} - v~) = b f^{n+1}, v~ = (4 v^n - v^{n-1}) / 3,
+// so x_hat = x~ + b v~ replaces x^n + h v^n and 1/h^2, 1/h become 1/b^2, 1/b. Rotations are
+// written in local coordinates about the current orientation q^n: theta = log(q^n^-1 q^{n+1})
+// and xi = log(q^n^-1 q^{n-1}) (body frame of q^n), theta + xi/3 = b w^{n+1}, and the body
+// angular velocities combine as the node velocities (Euler's equations are in body components).
+// Dissipation takes the BDF2 rates (x - x~)/b and (theta + xi/3)/b; the directions, drag
+// coefficients and follower loads held over the step are taken at the state extrapolated to
+// t + h (2 y^n - y^{n-1}), not at the start (which would cost an order). The mapping of the
+// rotational inertia term to the rotation increment (the J_r^-T factor, also in backward Euler)
+// leaves an O(h) error on it whose size is the rotational inertia's share of the motion,
+// I w x dw/dt; for rods (I of order m r^2) it is far below the second-order error.
+// Without a usable history the step is one backward-Euler step: the first step, a different h,
+// a different number of nodes, a change of the drives (a grasp taken or let go), and any state
+// not exactly the one the last step left (a reset, a configure, a state set from outside; the
+// guard's rollback restores the snapshot's history, and its retry at half the step restarts);
+// BDF2 then starts from that step.
 #pragma once
 
 #include <vector>
@@ -56,16 +77,26 @@ class ImplicitEuler {
   // contacts; respond() takes the total impulses and applies only the difference.
   ImplicitResult step(Rod& rod, double t, double h, const Vec3& gravity,
                       const std::vector<Vec3>* predicted = nullptr);
+  // BDF2 (true) or backward Euler (false, the default) from the next step on.
+  void set_second_order(bool on) { bdf2_ = on; }
+  bool second_order() const { return bdf2_; }
+  // Whether the last step was a BDF2 step (false: backward Euler, the start or restart).
+  bool last_step_second_order() const { return used_bdf2_; }
+  // Forgets the history: the next step is a backward-Euler step.
+  void reset_history() { have_history_ = false; }
 
   // After step(): sets the rod to the step's result plus the response to node impulses p (N s,
-  // world, one per node; applied as forces p / h over the step), linearised at the step's end
-  // with its Hessian: dx = A^-1 p / h, A = M / h^2 + the Hessian of E + D. The rotations follow
-  // through the coupling of A. Kinematic and constrained items respond only where they are free.
-  // Calling it again replaces the previous response.
-  void respond(Rod& rod, const std::vector<Vec3>& impulses, double h);
+  // world, one per node; applied as forces p / b over the step, b the step's effective step:
+  // h for backward Euler, 2h/3 for BDF2), linearised at the step's end with its Hessian:
+  // dx = A^-1 p / b, A = M / b^2 + the Hessian of E + D. The rotations follow through the
+  // coupling of A. Kinematic and constrained items respond only where they are free. Calling it
+  // again replaces the previous response.
+  void respond(Rod& rod, const std::vector<Vec3>& impulses);
   // The node velocity changes that respond() would add for these impulses, without changing the
-  // rod (dv = A^-1 p / h^2).
-  void response(const Rod& rod, const std::vector<Vec3>& impulses, double h, std::vector<Vec3>* dv);
+  // rod (dv = A^-1 p / b^2).
+  void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv);
+  // The last step's effective step b (s).
+  double effective_step() const { return beta_; }
   bool has_prediction() const { return !predicted_.empty(); }
   // The state at the start of the last step.
   const std::vector<Vec3>& start_positions() const { return x0_; }
@@ -82,14 +113,31 @@ class ImplicitEuler {
   void assemble(const Rod& rod, const RodSystem& sys, double h);
   void project_gradient(Eigen::VectorXd* g) const;
   void record_reactions(Rod& rod);
-  bool ensure_factor(const Rod& rod, double h);
-  void solve_impulses(const std::vector<Vec3>& impulses, double h);  // into z_
+  bool ensure_factor(const Rod& rod);
+  void solve_impulses(const std::vector<Vec3>& impulses);  // into z_
+  bool history_usable(const Rod& rod, double h) const;
+  void remember_end(const Rod& rod);
 
   ImplicitOptions opt_;
-  std::vector<Vec3> x0_, v0_, xhat_, xs_;
-  std::vector<Vec3> gth_;  // per segment: d Phi / d theta (scratch)
+  bool bdf2_ = false, used_bdf2_ = false;
+  double beta_ = 0.0;  // the step's effective step: h, or 2h/3 for BDF2
+  std::vector<Vec3> x0_, v0_, w0_, xhat_, xs_;
   std::vector<Quat> q0_, qk_;
-  std::vector<Vec3> what_;   // h w^n per segment (body)
+  // The origin of the step's node velocities, v = (x - xt_) / beta_ (x^n, or BDF2's x~), and per
+  // segment the offset of its rotation, b w = theta + off_ (0, or xi / 3).
+  std::vector<Vec3> xt_, off_;
+  std::vector<Vec3> xx_, vx_;  // BDF2: positions and velocities extrapolated to the step's end
+  std::vector<Quat> qx_;       // and orientations
+  // History for BDF2: the last step's start state and h, and the state it left the rod in (the
+  // next step uses the history only from exactly that state), and its drives.
+  bool have_history_ = false;
+  double h_last_ = 0.0;
+  std::vector<Vec3> xp_, vp_, wp_, xe_, ve_, we_;
+  std::vector<Quat> qp_, qe_;
+  std::vector<int> drives_last_;
+  std::vector<Vec3> gth_;    // per segment: d Phi / d theta (scratch)
+  std::vector<int> drives_;  // scratch: the drives' items and kinds
+  std::vector<Vec3> what_;   // h w^n per segment (body); BDF2: b w~ - xi / 3
   std::vector<Vec3> theta_;  // the current iterate's rotation over the step, per segment (body)
   // Per 3-component unknown u (node i: 2i, segment s: 2s + 1): 0 free, 1 held, 2 projected by
   // proj_[u] (the directions it may move in).
@@ -97,8 +145,8 @@ class ImplicitEuler {
   std::vector<Mat3> proj_;
   // Dissipation frozen at the step's start.
   std::vector<Vec3> tangent_;   // per segment: unit chord
-  std::vector<double> chord0_;  // per segment: t . (x_{s+1} - x_s) at the start
-  std::vector<Mat3> rot0_;      // per segment: R^n
+  std::vector<double> chord0_;  // per segment: t . (xt_{s+1} - xt_s)
+  std::vector<Mat3> rot0_;      // per segment: R^n (BDF2: R_p J_r(theta_p), see step())
   std::vector<Mat3> drag_;      // per node: drag matrix D_i (N s / m)
   bool friction_t_ = false, friction_r_ = false, drag_on_ = false;
   // Loads held over the step (world): forces on nodes, torques on segments.

@@ -20,9 +20,16 @@ namespace corde {
 // free segment's kinetic energy and world angular momentum to round-off and the step symplectic.
 // kImplicitEuler: backward Euler of nodes and rotations together (implicit_step.h), stable at
 // steps far beyond the explicit limit; run by World::step (a Rod alone steps explicitly only).
-enum class Integrator { kSemiImplicitEuler, kSplitRotation, kImplicitEuler };
+// kBdf2: the second-order backward differentiation formula on the same Newton solve
+// (implicit_step.h), stable at the same steps and far less damping; its first step (and any
+// after a change of h or of the state from outside) is a backward Euler step.
+enum class Integrator { kSemiImplicitEuler, kSplitRotation, kImplicitEuler, kBdf2 };
 constexpr Integrator kDefaultIntegrator = Integrator::kSplitRotation;
-// Scene and parameter names: "semi_implicit_euler", "split_rotation", "implicit_euler".
+// The implicit methods (World::step's Newton solve): implicit_euler and bdf2.
+constexpr bool is_implicit(Integrator i) {
+  return i == Integrator::kImplicitEuler || i == Integrator::kBdf2;
+}
+// Scene and parameter names: "semi_implicit_euler", "split_rotation", "implicit_euler", "bdf2".
 const char* integrator_name(Integrator integrator);
 // False for an unknown name (integrator left unchanged).
 bool parse_integrator(const std::string& name, Integrator* integrator);

@@ -13,7 +13,7 @@
 
 namespace corde {
 
-// The implicit integrator's Newton solves over the last step (Integrator::kImplicitEuler).
+// The implicit integrator's Newton solves over the last step (Integrator::kImplicitEuler, kBdf2).
 struct ImplicitStats {
   int iterations = 0;           // Newton iterations, the most any rod took
   int unconverged = 0;          // rods whose Newton iterations stopped short of the tolerance
@@ -31,7 +31,8 @@ class World {
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);
   double time_step = 1e-4;  // s
   // How the rods are stepped (rod.h): the explicit methods (nodes by semi-implicit Euler, the
-  // segments' rotations as named), or backward Euler of everything (kImplicitEuler).
+  // segments' rotations as named), or backward Euler (kImplicitEuler) or BDF2 (kBdf2) of
+  // everything.
   Integrator integrator = kDefaultIntegrator;
   // Newton settings of the implicit integrator.
   ImplicitOptions implicit;
@@ -55,8 +56,9 @@ class World {
   // Advances every rod by time_step: keyframed obstacles are posed first; with an explicit
   // integrator a world without anything to collide runs each rod's fused step, otherwise forces
   // of every rod, then contacts (detection and the constraint solve), then the integration and
-  // the drives. With the implicit one every rod takes its backward Euler step, then contacts are
-  // solved against those steps (ContactSystem::solve_implicit).
+  // the drives. With an implicit one every rod takes its backward Euler or BDF2 step, then
+  // contacts are solved against those steps (ContactSystem::solve_implicit, with each step's own
+  // compliance: BDF2's effective step 2h/3 in the response).
   void step();
   // The implicit integrator's solves in the last step (zero for the explicit methods).
   const ImplicitStats& implicit_stats() const { return implicit_stats_; }

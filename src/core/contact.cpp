@@ -147,7 +147,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     gather([&](size_t k) { return Vec3(contacts_[k].pn * contacts_[k].normal + contacts_[k].pt); });
     for (int r = 0; r < nr; ++r) {
       if (!touched_[r]) continue;
-      steppers[r].respond(rods[r], impulse_[r], h);
+      steppers[r].respond(rods[r], impulse_[r]);
       velocity_[r] = rods[r].velocities();
     }
   };
@@ -192,7 +192,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
     });
     for (int r = 0; r < nr; ++r)
-      if (touched_[r]) steppers[r].response(rods[r], impulse_[r], h, &change_v_[r]);
+      if (touched_[r]) steppers[r].response(rods[r], impulse_[r], &change_v_[r]);
     auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
       return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
     };

@@ -33,6 +33,17 @@ Vec3 inv_right_jacobian_t(const Vec3& theta, const Vec3& y) {
   return y - 0.5 * theta.cross(y) + c * theta.cross(theta.cross(y));
 }
 
+// J_r(theta), the right Jacobian of exp: exp(theta + d) = exp(theta) exp(J_r(theta) d) to first
+// order in d.
+Mat3 right_jacobian(const Vec3& theta) {
+  const double a = theta.norm();
+  const double c1 = a < 1e-4 ? 0.5 - a * a / 24.0 : (1.0 - std::cos(a)) / (a * a);
+  const double c2 = a < 1e-4 ? 1.0 / 6.0 - a * a / 120.0 : (a - std::sin(a)) / (a * a * a);
+  Mat3 k;
+  k << 0.0, -theta.z(), theta.y(), theta.z(), 0.0, -theta.x(), -theta.y(), theta.x(), 0.0;
+  return Mat3::Identity() - c1 * k + c2 * k * k;
+}
+
 // Restricts unknown u (3 components at 3u) of a to the directions of the projector p: rows and
 // columns multiplied by p, the complement (I - p) on the diagonal, so that the solution's
 // component lies in p's range and the matrix stays positive definite.
@@ -93,19 +104,20 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
   friction_t_ = sec.gamma_t > 0.0;
   friction_r_ = sec.gamma_r > 0.0 && ns > 1;
   drag_on_ = rod.drag().active();
+  // Directions and drag coefficients: at the step's start for backward Euler (first order), at
+  // the state extrapolated to the step's end for BDF2 (frozen at the start they would leave an
+  // O(h) error in the forces, which makes the step first order).
+  const std::vector<Vec3>& xd = used_bdf2_ ? xx_ : x0_;
+  const std::vector<Vec3>& vd = used_bdf2_ ? vx_ : v0_;
   if (friction_t_ || drag_on_) {
     tangent_.resize(ns);
     chord0_.resize(ns);
     for (int s = 0; s < ns; ++s) {
-      const Vec3 d = x0_[s + 1] - x0_[s];
+      const Vec3 d = xd[s + 1] - xd[s];
       const double len = d.norm();
       tangent_[s] = len > 0.0 ? Vec3(d / len) : Vec3::Zero();
-      chord0_[s] = len;
+      chord0_[s] = tangent_[s].dot(xt_[s + 1] - xt_[s]);  // len for backward Euler
     }
-  }
-  if (friction_r_) {
-    rot0_.resize(ns);
-    for (int s = 0; s < ns; ++s) rot0_[s] = q0_[s].toRotationMatrix();
   }
   if (drag_on_) {
     // As Rod::drag_block: per node the chord across it, the length it stands for (its mass over
@@ -114,10 +126,10 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
     const double inv_mu = 1.0 / sec.mass_per_length;
     drag_.resize(nn);
     for (int i = 0; i < nn; ++i) {
-      const Vec3 chord = x0_[std::min(i + 1, ns)] - x0_[std::max(i - 1, 0)];
+      const Vec3 chord = xd[std::min(i + 1, ns)] - xd[std::max(i - 1, 0)];
       const double len = chord.norm();
       const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
-      const Vec3& v = v0_[i];
+      const Vec3& v = vd[i];
       const Vec3 vt = v.dot(t) * t, vn = v - vt;
       const double cn = dr.linear_normal + dr.quadratic_normal * vn.norm();
       const double ct = dr.linear_tangential + dr.quadratic_tangential * vt.norm();
@@ -135,8 +147,11 @@ void ImplicitEuler::setup_loads(const Rod& rod, double t1) {
     const double f = l.scale(t1);
     if (f == 0.0) continue;
     Vec3 value = f * l.value;
-    if (l.follower)
-      value = q0_[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] * value;
+    if (l.follower)  // turned with the segment at the start (BDF2: extrapolated to the end)
+      value =
+          (used_bdf2_ ? qx_
+                      : q0_)[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] *
+          value;
     (l.kind == Load::Kind::kForce ? forces_ : torques_).push_back({l.index, value});
   }
   if (rod.has_external()) {
@@ -169,19 +184,20 @@ double ImplicitEuler::merit(const Rod& rod, const RodSystem& sys, double h) cons
     const double gr = rod.section().gamma_r;
     const auto& rest = rod.rest_lengths();
     for (int j = 0; j + 1 < ns; ++j) {
-      const Vec3 dw = rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j];
+      const Vec3 dw =
+          rot0_[j + 1] * (theta_[j + 1] + off_[j + 1]) - rot0_[j] * (theta_[j] + off_[j]);
       phi += 0.5 * inv_h * gr / (0.5 * (rest[j] + rest[j + 1])) * dw.squaredNorm();
     }
   }
   if (drag_on_)
     for (int i = 0; i < nn; ++i) {
-      const Vec3 dx = x[i] - x0_[i];
+      const Vec3 dx = x[i] - xt_[i];
       phi += 0.5 * inv_h * dx.dot(drag_[i] * dx);
     }
   for (const auto& [i, f] : forces_) phi -= f.dot(x[i]);
   // Torques have no potential on the rotations; their work along the step's rotation (as
   // statics takes it) keeps Phi consistent with the gradient.
-  for (const auto& [s, tq] : torques_) phi -= tq.dot(q0_[s] * theta_[s]);
+  for (const auto& [s, tq] : torques_) phi -= tq.dot(rot0_[s] * theta_[s]);
   return phi;
 }
 
@@ -205,7 +221,7 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
   }
   if (drag_on_)
     for (int i = 0; i < nn; ++i)
-      g->segment<3>(RodSystem::node_index(i)) += inv_h * (drag_[i] * (x[i] - x0_[i]));
+      g->segment<3>(RodSystem::node_index(i)) += inv_h * (drag_[i] * (x[i] - xt_[i]));
   for (const auto& [i, f] : forces_) g->segment<3>(RodSystem::node_index(i)) -= f;
   // Per segment, the gradient with respect to its total rotation theta, then mapped to the
   // increment at the current iterate.
@@ -216,13 +232,14 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
     const double gr = rod.section().gamma_r;
     const auto& rest = rod.rest_lengths();
     for (int j = 0; j + 1 < ns; ++j) {
-      const Vec3 dw = (inv_h * gr / (0.5 * (rest[j] + rest[j + 1]))) *
-                      (rot0_[j + 1] * theta_[j + 1] - rot0_[j] * theta_[j]);
+      const Vec3 dw =
+          (inv_h * gr / (0.5 * (rest[j] + rest[j + 1]))) *
+          (rot0_[j + 1] * (theta_[j + 1] + off_[j + 1]) - rot0_[j] * (theta_[j] + off_[j]));
       gth_[j + 1] += rot0_[j + 1].transpose() * dw;
       gth_[j] -= rot0_[j].transpose() * dw;
     }
   }
-  for (const auto& [s, tq] : torques_) gth_[s] -= q0_[s].conjugate() * tq;
+  for (const auto& [s, tq] : torques_) gth_[s] -= rot0_[s].transpose() * tq;
   for (int s = 0; s < ns; ++s)
     g->segment<3>(RodSystem::segment_index(s)) += inv_right_jacobian_t(theta_[s], gth_[s]);
 }
@@ -257,8 +274,8 @@ void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
     for (int j = 0; j + 1 < ns; ++j) {
       const double c = inv_h * gr / (0.5 * (rest[j] + rest[j + 1]));
       const int a = RodSystem::segment_index(j), b = RodSystem::segment_index(j + 1);
-      a_.add(a, a, c * Mat3::Identity());
-      a_.add(b, b, c * Mat3::Identity());
+      a_.add(a, a, c * (rot0_[j].transpose() * rot0_[j]));
+      a_.add(b, b, c * (rot0_[j + 1].transpose() * rot0_[j + 1]));
       a_.add(b, a, -c * (rot0_[j + 1].transpose() * rot0_[j]));
     }
   }
@@ -289,6 +306,24 @@ void ImplicitEuler::record_reactions(Rod& rod) {
   }
 }
 
+void ImplicitEuler::remember_end(const Rod& rod) {
+  xe_ = rod.positions();
+  qe_ = rod.orientations();
+  ve_ = rod.velocities();
+  we_ = rod.angular_velocities();
+}
+
+bool ImplicitEuler::history_usable(const Rod& rod, double h) const {
+  if (!have_history_ || h != h_last_ || drives_ != drives_last_) return false;
+  if (rod.positions() != xe_ || rod.velocities() != ve_ || rod.angular_velocities() != we_)
+    return false;
+  const auto& q = rod.orientations();
+  if (q.size() != qe_.size()) return false;
+  for (size_t s = 0; s < q.size(); ++s)
+    if (q[s].coeffs() != qe_[s].coeffs()) return false;
+  return true;
+}
+
 ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
                                    const std::vector<Vec3>* predicted) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
@@ -296,23 +331,80 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   auto& q = rod.orientations();
   auto& v = rod.velocities();
   auto& w = rod.angular_velocities();
+  // The drives' items and kinds: a grasp taken or let go restarts BDF2.
+  drives_.clear();
+  for (const NodeDrive& d : rod.node_drives())
+    drives_.push_back(4 * d.node + static_cast<int>(d.kind));
+  for (const SegmentDrive& d : rod.segment_drives())
+    drives_.push_back(-4 * d.segment - 1 - static_cast<int>(d.kind));
+  // BDF2 needs the last step's start state as x^{n-1}; without a usable history (the first
+  // step, a new h such as the guard's retry at half the step, a state changed from outside: a
+  // reset, a configure, a teleport) this step is one backward-Euler step, from which BDF2 starts.
+  // Contacts acted on the rod in the last step (their impulses are the prediction): their velocity
+  // jumps are not smooth in time, and BDF2's memory of the positions before them would carry the
+  // motion into the contact (the energy rises), so the step is a backward Euler step. Contacts
+  // are first order in time either way.
+  bool touching = false;
+  if (predicted)
+    for (const Vec3& p : *predicted) touching = touching || !p.isZero();
+  const bool second = bdf2_ && !touching && history_usable(rod, h);
+  used_bdf2_ = second;
+  if (second) {
+    xp_.swap(x0_);
+    qp_.swap(q0_);
+    vp_.swap(v0_);
+    wp_.swap(w0_);
+  }
   x0_ = x;
   q0_ = q;
   v0_ = v;
+  w0_ = w;
+  beta_ = second ? 2.0 * h / 3.0 : h;
+  xt_.resize(nn);
+  off_.resize(ns);
   xhat_.resize(nn);
   what_.resize(ns);
   theta_.resize(ns);
-  for (int i = 0; i < nn; ++i) xhat_[i] = x[i] + h * v[i];
-  for (int s = 0; s < ns; ++s) what_[s] = h * w[s];
+  for (int i = 0; i < nn; ++i) {
+    xt_[i] = second ? Vec3((4.0 * x[i] - xp_[i]) / 3.0) : x[i];
+    const Vec3 vt = second ? Vec3((4.0 * v[i] - vp_[i]) / 3.0) : v[i];
+    xhat_[i] = xt_[i] + beta_ * vt;
+  }
+  for (int s = 0; s < ns; ++s) {
+    off_[s] = second ? Vec3(log_body(q0_[s].conjugate() * qp_[s]) / 3.0) : Vec3::Zero();
+    const Vec3 wt = second ? Vec3((4.0 * w[s] - wp_[s]) / 3.0) : w[s];
+    what_[s] = beta_ * wt - off_[s];
+  }
+  if (second) {  // linear extrapolation to t + h, for the directions held over the step
+    xx_.resize(nn);
+    vx_.resize(nn);
+    qx_.resize(ns);
+    for (int i = 0; i < nn; ++i) {
+      xx_[i] = 2.0 * x[i] - xp_[i];
+      vx_[i] = 2.0 * v[i] - vp_[i];
+    }
+    for (int s = 0; s < ns; ++s) qx_[s] = (q0_[s] * exp_body(-3.0 * off_[s])).normalized();
+  }
   factored_ = false;
+  const double hs = h;  // the world's step (drives, loads and the new time use it)
+  h = beta_;            // the step the minimisation takes
 
   // Predictor: free items move on with their velocities; supports are set or projected.
-  const double t1 = t + h;
+  const double t1 = t + hs;
   for (int i = 0; i < nn; ++i) x[i] = xhat_[i];
   for (int s = 0; s < ns; ++s) q[s] = (q0_[s] * exp_body(what_[s])).normalized();
   setup_supports(rod, t1);
   for (GhostFrame* gf : {&rod.ghost_start(), &rod.ghost_end()})
     if (gf->active && gf->motion) gf->frame = ghost_frame_at(*gf, t1);
+  // Per segment the map from its rotation over the step to the world, for torques (their work
+  // along the step's rotation) and rotational friction (world angular velocities): R^n for
+  // backward Euler; for BDF2 R_p J_r(theta_p) at the extrapolated rotation theta_p = -xi, so
+  // that after the increment's mapping J_r^-T(theta) they act in the frame of the step's end to
+  // O(h^2) (with R^n they would act in the middle of the step, an O(h) error).
+  rot0_.resize(ns);
+  for (int s = 0; s < ns; ++s)
+    rot0_[s] = second ? Mat3(qx_[s].toRotationMatrix() * right_jacobian(-3.0 * off_[s]))
+                      : Mat3(q0_[s].toRotationMatrix());
   setup_dissipation(rod, h);
   setup_loads(rod, t1);
   predicted_.clear();
@@ -422,8 +514,8 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   g_trial_.swap(g_);
   record_reactions(rod);
   g_trial_.swap(g_);
-  for (int i = 0; i < nn; ++i) v[i] = (x[i] - x0_[i]) / h;
-  for (int s = 0; s < ns; ++s) w[s] = theta_[s] / h;
+  for (int i = 0; i < nn; ++i) v[i] = (x[i] - xt_[i]) / h;
+  for (int s = 0; s < ns; ++s) w[s] = (theta_[s] + off_[s]) / h;
   // Drives give their own velocities (as Rod::step's drives do).
   for (const NodeDrive& d : rod.node_drives())
     if (d.kind != NodeDrive::Kind::kTarget) drive_position(d, t1, &v[d.node]);
@@ -437,21 +529,28 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   q_free_ = q;
   v_free_ = v;
   w_free_ = w;
+  have_history_ = bdf2_;
+  if (bdf2_) {
+    h_last_ = hs;
+    drives_last_ = drives_;
+    remember_end(rod);
+  }
   return res;
 }
 
-bool ImplicitEuler::ensure_factor(const Rod& rod, double h) {
+bool ImplicitEuler::ensure_factor(const Rod& rod) {
   if (factored_) return true;
   // Converged without a Newton iteration: factor at the result.
   RodSystem sys{&rod, Vec3::Zero(), 0.0};
   sys.definite = true;
   sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;
-  assemble(rod, sys, h);
+  assemble(rod, sys, beta_);
   factored_ = solver_.factor(a_);
   return factored_;
 }
 
-void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) {
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses) {
+  const double h = beta_;
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
@@ -462,17 +561,19 @@ void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) 
   project_gradient(&z_);
 }
 
-void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses, double h,
+void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
                              std::vector<Vec3>* dv) {
   const int nn = rod.num_nodes();
+  const double h = beta_;
   dv->assign(nn, Vec3::Zero());
-  if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
+  if (!ensure_factor(rod)) return;
+  solve_impulses(impulses);
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
-void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double h) {
+void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
+  const double h = beta_;
   auto& x = rod.positions();
   auto& q = rod.orientations();
   auto& v = rod.velocities();
@@ -481,18 +582,20 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double 
   q = q_free_;
   v = v_free_;
   w = w_free_;
-  if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
-  for (int i = 0; i < nn; ++i) {
-    if (kind_[2 * i] == 1) continue;
-    x[i] += z_.segment<3>(6 * i);
-    v[i] = (x[i] - x0_[i]) / h;
+  if (ensure_factor(rod)) {
+    solve_impulses(impulses);
+    for (int i = 0; i < nn; ++i) {
+      if (kind_[2 * i] == 1) continue;
+      x[i] += z_.segment<3>(6 * i);
+      v[i] = (x[i] - xt_[i]) / h;
+    }
+    for (int s = 0; s < ns; ++s) {
+      if (kind_[2 * s + 1] == 1) continue;
+      q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
+      w[s] = (log_body(q0_[s].conjugate() * q[s]) + off_[s]) / h;
+    }
   }
-  for (int s = 0; s < ns; ++s) {
-    if (kind_[2 * s + 1] == 1) continue;
-    q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
-    w[s] = log_body(q0_[s].conjugate() * q[s]) / h;
-  }
+  if (bdf2_) remember_end(rod);
 }
 
 }  // namespace corde

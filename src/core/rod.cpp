@@ -628,13 +628,15 @@ const char* integrator_name(Integrator integrator) {
       return "split_rotation";
     case Integrator::kImplicitEuler:
       return "implicit_euler";
+    case Integrator::kBdf2:
+      return "bdf2";
   }
   return "unknown";
 }
 
 bool parse_integrator(const std::string& name, Integrator* integrator) {
-  for (Integrator i :
-       {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation, Integrator::kImplicitEuler})
+  for (Integrator i : {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation,
+                       Integrator::kImplicitEuler, Integrator::kBdf2})
     if (name == integrator_name(i)) {
       *integrator = i;
       return true;
@@ -644,7 +646,7 @@ bool parse_integrator(const std::string& name, Integrator* integrator) {
 
 namespace {
 void require_explicit(const std::string& rod, Integrator integrator) {
-  if (integrator == Integrator::kImplicitEuler)
+  if (is_implicit(integrator))
     throw std::invalid_argument(
         "rod '" + rod + "': the implicit integrator runs through World::step, not Rod::step");
 }

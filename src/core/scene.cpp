@@ -480,14 +480,14 @@ void choose_step(Scene* scene, const Value* given, bool integrator_auto) {
     scene->world.integrator = c.integrator;
     scene->world.time_step = c.time_step;
     scene->notes.push_back(c.reason);
-  } else if (scene->world.integrator == Integrator::kImplicitEuler && !given) {
+  } else if (is_implicit(scene->world.integrator) && !given) {
     const ImplicitStep s = implicit_time_step(*scene);
     scene->world.time_step = s.time_step;
-    scene->notes.push_back("time_step: auto chose " + num(s.time_step) +
-                           " s for implicit_euler, set by " + s.why);
+    scene->notes.push_back("time_step: auto chose " + num(s.time_step) + " s for " +
+                           integrator_name(scene->world.integrator) + ", set by " + s.why);
   }
-  // The implicit method has no stability limit to check.
-  if (scene->world.integrator != Integrator::kImplicitEuler) check_time_step(scene, given);
+  // The implicit methods have no stability limit to check.
+  if (!is_implicit(scene->world.integrator)) check_time_step(scene, given);
 }
 
 std::string stem(const std::string& path) {
@@ -556,7 +556,7 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   bool integrator_auto = false;
   if (auto v = top.find("integrator")) {
     const std::string name =
-        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "auto"});
+        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "bdf2", "auto"});
     integrator_auto = name == "auto";
     if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
   }

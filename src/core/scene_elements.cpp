@@ -113,7 +113,7 @@ struct Probe {
   RunResult result;
 };
 
-bool is_explicit(Integrator i) { return i != Integrator::kImplicitEuler; }
+bool is_explicit(Integrator i) { return !is_implicit(i); }
 
 Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
                 const SceneBuilder& build, const Scene* like) {

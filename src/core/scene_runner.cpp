@@ -253,7 +253,7 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   char buf[512];
   std::string out = scene_header(scene);
   for (const std::string& note : scene.notes) out += "chosen     " + note + "\n";
-  const bool implicit = scene.world.integrator == Integrator::kImplicitEuler;
+  const bool implicit = is_implicit(scene.world.integrator);
   for (const Rod& rod : scene.world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
     std::snprintf(buf, sizeof buf,

@@ -26,11 +26,7 @@ struct ImplicitOf<E, std::void_t<decltype(E::kImplicitEuler)>> {
 constexpr bool kHaveImplicit = ImplicitOf<Integrator>::kAvailable;
 constexpr Integrator kImplicit = ImplicitOf<Integrator>::kValue;
 
-const char* method_name(Integrator i) {
-  if (i == Integrator::kSemiImplicitEuler) return "semi_implicit_euler";
-  if (i == Integrator::kSplitRotation) return "split_rotation";
-  return "implicit_euler";
-}
+const char* method_name(Integrator i) { return integrator_name(i); }
 
 std::string fmt(const char* f, double a, double b) {
   char buf[200];
@@ -325,7 +321,8 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
   e.detail = p.detail;
   e.rollback_to = world.time();
   const bool threw = p.detail.rfind("the step threw", 0) == 0;
-  const bool explicit_method = !kHaveImplicit || integrator_ != kImplicit;
+  // bdf2 is implicit too: it halves its step, and the fallback stays implicit_euler.
+  const bool explicit_method = !kHaveImplicit || !is_implicit(integrator_);
   const bool allow_implicit = settings_.allow_implicit && kHaveImplicit;
   if (trial_) {
     // The user's setting failed again: back to the one that worked, and wait longer next time.
@@ -408,8 +405,7 @@ bool StepGuard::run(World* world, long n, bool check_at_end, const StepFn& fn) {
         }
         // An implicit step whose Newton iterations stopped far short of their tolerance left the
         // rods at an iterate, not a solution: a failure that a smaller step can cure.
-        if (world->integrator == Integrator::kImplicitEuler &&
-            world->implicit_stats().unconverged > 0 &&
+        if (is_implicit(world->integrator) && world->implicit_stats().unconverged > 0 &&
             !(world->implicit_stats().worst_residual <= 1e-3)) {
           char buf[160];
           std::snprintf(buf, sizeof buf,

@@ -24,7 +24,7 @@ const Rod& World::rod(const std::string& name) const { return const_cast<World*>
 void World::step() {
   if (obstacles && !obstacle_motions.empty())
     move_obstacles(obstacle_motions, time_, time_step, obstacles.get());
-  if (integrator == Integrator::kImplicitEuler) {
+  if (is_implicit(integrator)) {
     step_implicit();
   } else if (!ContactSystem::needed(*this)) {
     for (Rod& r : rods_) r.step(time_, time_step, gravity, integrator);
@@ -44,6 +44,7 @@ void World::step_implicit() {
   const bool contacts = ContactSystem::needed(*this);
   for (size_t r = 0; r < rods_.size(); ++r) {
     implicit_[r].set_options(implicit);
+    implicit_[r].set_second_order(integrator == Integrator::kBdf2);
     // Contacts' impulses of the last step as the prediction (they change little between steps).
     const std::vector<Vec3>* predicted =
         contacts && contacts_ ? contacts_->last_impulses(static_cast<int>(r)) : nullptr;

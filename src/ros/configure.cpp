@@ -71,8 +71,9 @@ const std::vector<std::string>& configure_flags() {
 
 std::string integrator_names() {
   std::string out;
-  for (corde::Integrator i : {corde::Integrator::kSemiImplicitEuler,
-                              corde::Integrator::kSplitRotation, corde::Integrator::kImplicitEuler})
+  for (corde::Integrator i :
+       {corde::Integrator::kSemiImplicitEuler, corde::Integrator::kSplitRotation,
+        corde::Integrator::kImplicitEuler, corde::Integrator::kBdf2})
     out += (out.empty() ? "" : ", ") + std::string(corde::integrator_name(i));
   return out;
 }
@@ -80,7 +81,7 @@ std::string integrator_names() {
 double explicit_margin(const corde::World& world, std::string* limiting_rod) {
   double margin = 0.0;
   limiting_rod->clear();
-  if (world.integrator == corde::Integrator::kImplicitEuler) return 0.0;
+  if (corde::is_implicit(world.integrator)) return 0.0;
   for (const corde::Rod& rod : world.rods()) {
     const double m = world.time_step / corde::critical_time_step(rod);
     if (!(m <= margin)) {  // NaN wins: it is reported, not hidden

@@ -145,7 +145,7 @@ void SimNode::bump_time() {
 
 std::string SimNode::margin_text() const {
   // The explicit limit means nothing to the implicit method: saying 0 would read as a margin.
-  if (world_.integrator == corde::Integrator::kImplicitEuler) return "no explicit step limit";
+  if (corde::is_implicit(world_.integrator)) return "no explicit step limit";
   char buf[64];
   std::snprintf(buf, sizeof buf, "h/h_crit %.3g", stability_margin_);
   return buf;

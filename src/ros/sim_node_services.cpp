@@ -119,9 +119,8 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   res.message = "configured " +
                 (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
                 summary + "(" + corde::integrator_name(world_.integrator) +
-                (world_.integrator == corde::Integrator::kImplicitEuler
-                     ? std::string(", no explicit step limit")
-                     : ", h/h_crit " + num(stability_margin_)) +
+                (corde::is_implicit(world_.integrator) ? std::string(", no explicit step limit")
+                                                       : ", h/h_crit " + num(stability_margin_)) +
                 ")" + note;
   ROS_INFO("corde_sim: %s", res.message.c_str());
   return;

@@ -1,6 +1,6 @@
-// One time-step interface over the three integrators the charts compare (corde_charts,
-// corde_accuracy): the explicit ones through Rod::step, backward Euler through ImplicitEuler on the
-// rod itself (the charts' scenes have no contacts). Library only, no ROS.
+// One time-step interface over the integrators the charts compare (corde_charts,
+// corde_accuracy): the explicit ones through Rod::step, backward Euler and BDF2 through
+// ImplicitEuler on the rod itself (the charts' scenes have no contacts). Library only, no ROS.
 #pragma once
 
 #include <ctime>
@@ -16,9 +16,19 @@ constexpr double kPi = 3.14159265358979323846;
 
 // kSplitRotationScaled: split_rotation on a rod whose tilt inertia is scaled by
 // lifting_inertia_scale() (rotational_inertia_scale: auto; docs/model.md). Work-precision only.
-enum class Method { kSemiImplicitEuler, kSplitRotation, kImplicitEuler, kSplitRotationScaled };
+enum class Method {
+  kSemiImplicitEuler,
+  kSplitRotation,
+  kImplicitEuler,
+  kBdf2,
+  kSplitRotationScaled
+};
+// The stability map and the scaling (BDF2 runs the same Newton solve as backward Euler).
 constexpr Method kMethods[] = {Method::kSemiImplicitEuler, Method::kSplitRotation,
                                Method::kImplicitEuler};
+// The work-precision charts.
+constexpr Method kWorkMethods[] = {Method::kSemiImplicitEuler, Method::kSplitRotation,
+                                   Method::kImplicitEuler, Method::kBdf2};
 
 inline const char* method_name(Method m) {
   switch (m) {
@@ -28,21 +38,25 @@ inline const char* method_name(Method m) {
       return "split_rotation";
     case Method::kImplicitEuler:
       return "implicit_euler";
+    case Method::kBdf2:
+      return "bdf2";
     case Method::kSplitRotationScaled:
       return "split_rotation_scaled";
   }
   return "unknown";
 }
 
-inline bool is_explicit(Method m) { return m != Method::kImplicitEuler; }
+inline bool is_explicit(Method m) { return m != Method::kImplicitEuler && m != Method::kBdf2; }
 
 class Stepper {
  public:
   explicit Stepper(Method m, ImplicitOptions options = ImplicitOptions())
-      : method_(m), implicit_(options) {}
+      : method_(m), implicit_(options) {
+    implicit_.set_second_order(m == Method::kBdf2);
+  }
   // One step from t to t + h; false when Newton did not converge (implicit only).
   bool step(Rod& rod, double t, double h, const Vec3& gravity) {
-    if (method_ == Method::kImplicitEuler) {
+    if (!is_explicit(method_)) {
       const ImplicitResult r = implicit_.step(rod, t, h, gravity);
       iterations_ += r.iterations;
       relative_residual_ = r.reference > 0.0 ? r.residual / r.reference : r.residual;

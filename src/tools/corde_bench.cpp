@@ -42,7 +42,8 @@
 // Hessian (fd = 0) against the former finite-difference Hessian (fd = 1).
 // BM_RopeOnFloorSelfContactImplicit/h_us: the coiled rope with the implicit integrator at that
 // step. BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned
-// at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported).
+// at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported);
+// BM_Bdf2Step/N: the same with BDF2 (one step is one 2 ms frame).
 // BM_StaticsMode/scene and BM_DynamicRelaxation/scene: statics as a mode (solve_scene_statics)
 // against dynamic relaxation (viscous) run until the forces vanish to the same tolerance,
 // on the shipped V2 cantilever (scene 0) and on a 100-element cable hanging between two pins (scene
@@ -667,8 +668,9 @@ void BM_Statics(benchmark::State& state) {
 }
 
 // A 1 m steel cable (r = 2 mm) pinned at node 0, released horizontal: steps of 2 ms while it
-// swings down (restarted every 200 steps, outside the timing, so that it keeps moving).
-void BM_ImplicitEulerStep(benchmark::State& state) {
+// swings down (restarted every 200 steps, outside the timing, so that it keeps moving; a BDF2
+// run then takes one backward Euler step).
+void implicit_cable_steps(benchmark::State& state, bool bdf2) {
   const int n = static_cast<int>(state.range(0));
   Rod rod = make_step_system(n).rod;
   for (auto& x : rod.positions()) x /= 1.001;
@@ -676,6 +678,7 @@ void BM_ImplicitEulerStep(benchmark::State& state) {
   rod.add_node_drive({corde::NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
   const Rod start_state = rod;
   corde::ImplicitEuler integrator;
+  integrator.set_second_order(bdf2);
   const double h = 2e-3;
   double t = 0.0;
   long steps = 0, iterations = 0;
@@ -702,7 +705,12 @@ void BM_ImplicitEulerStep(benchmark::State& state) {
   if (!ok) state.SkipWithError("a step did not converge");
 }
 
+void BM_ImplicitEulerStep(benchmark::State& state) { implicit_cable_steps(state, false); }
+// The same with BDF2 (integrator bdf2): the same Newton solve with another start combination.
+void BM_Bdf2Step(benchmark::State& state) { implicit_cable_steps(state, true); }
+
 BENCHMARK(BM_ImplicitEulerStep)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Bdf2Step)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_Statics)->ArgsProduct({{40, 100, 1000}, {0, 1}})->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SystemHessian)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_BandedFactorSolve)->Arg(40)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);

@@ -13,7 +13,8 @@ import subprocess
 import sys
 import tempfile
 
-METHODS = {"semi_implicit_euler", "split_rotation", "implicit_euler", "split_rotation_scaled"}
+METHODS = {"semi_implicit_euler", "split_rotation", "implicit_euler", "bdf2",
+           "split_rotation_scaled"}
 COLUMNS = {
     "work_precision.csv": ["scene", "method", "elements", "h", "cpu_per_frame_us", "error",
                            "newton_per_step", "failures"],
@@ -24,9 +25,9 @@ COLUMNS = {
                     "factor_per_step", "theory_per_step", "decay_per_period",
                     "theory_decay_per_period", "damping_ratio", "theory_damping_ratio"],
 }
-# --short: 3 scenes x 4 methods (split_rotation_scaled included), 3 methods x 2 moduli,
-# 3 methods x 2 N, 2 implicit + 1 explicit.
-ROWS = {"work_precision.csv": 12, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 3}
+# --short: 3 scenes x 5 methods (bdf2 and split_rotation_scaled in the work-precision runs only),
+# 3 methods x 2 moduli, 3 methods x 2 N, 2 backward Euler + 2 BDF2 + 1 explicit.
+ROWS = {"work_precision.csv": 15, "stability_map.csv": 6, "scaling.csv": 6, "damping.csv": 5}
 
 failures = []
 
@@ -78,8 +79,9 @@ def main():
             check(0 < float(r["us_per_step"]) < 1e5, f"scaling {r['method']}: {r['us_per_step']}")
         for r in data.get("damping.csv", []):
             got, want = float(r["factor_per_step"]), float(r["theory_per_step"])
-            # Backward Euler's amplitude factor per step on one mode, 1/sqrt(1 + (h w)^2); the
-            # explicit point keeps the amplitude (theory 1). N = 10 shifts w by about 1%.
+            # Backward Euler's amplitude factor per step on one mode, 1/sqrt(1 + (h w)^2), BDF2's
+            # the modulus of its principal root; the explicit point keeps the amplitude (theory
+            # 1). N = 10 shifts w by about 1%.
             check(abs(got - want) < 0.01, f"damping {r['method']} h*w={r['h_omega']}: per step "
                   f"{got}, theory {want}")
         if failures:

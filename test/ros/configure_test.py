@@ -163,6 +163,7 @@ class Configure(unittest.TestCase):
         self.assertFalse(r.success)
         self.assertIn("rk4", r.message)
         self.assertIn("implicit_euler", r.message)
+        self.assertIn("bdf2", r.message)
         # 2 ms is beyond the explicit limit (3.7e-4 s): refused for split_rotation ...
         r = self.sim.configure(["time_step"], [2e-3])
         self.assertFalse(r.success)
@@ -174,6 +175,14 @@ class Configure(unittest.TestCase):
         self.assertIn("integrator=implicit_euler", r.message)
         s0 = self.sim.fresh_state()
         self.assertEqual(s0.time_step, 2e-3)
+        s = self.step(50)
+        self.assertAlmostEqual(s.sim_time - s0.sim_time, 50 * 2e-3, delta=1e-9)
+        self.assertTrue(ct.finite_state(s))
+        # bdf2 (the second-order implicit method) at the same step: taken, and it runs.
+        r = self.sim.configure(integrator="bdf2")
+        self.assertTrue(r.success, r.message)
+        self.assertIn("integrator=bdf2", r.message)
+        s0 = self.sim.fresh_state()
         s = self.step(50)
         self.assertAlmostEqual(s.sim_time - s0.sim_time, 50 * 2e-3, delta=1e-9)
         self.assertTrue(ct.finite_state(s))

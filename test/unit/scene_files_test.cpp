@@ -53,7 +53,7 @@ TEST(SceneFiles, EveryFileParsesAndRuns) {
     for (const std::string& w : s.warnings) ADD_FAILURE() << "warning: " << w;
     // Explicit methods: a margin below the stability limit, not just below it. (The implicit
     // method has none; the default scene runs it at 2 ms, over 100 times the explicit limit.)
-    if (s.world.integrator != Integrator::kImplicitEuler) {
+    if (!is_implicit(s.world.integrator)) {
       for (const Rod& rod : s.world.rods())
         EXPECT_LE(s.world.time_step, 0.9 * critical_time_step(rod)) << rod.name();
     }
