@@ -63,8 +63,8 @@ class ImplicitEuler {
   // through the coupling of A. Kinematic and constrained items respond only where they are free.
   // Calling it again replaces the previous response.
   void respond(Rod& rod, const std::vector<Vec3>& impulses, double h);
-  // The node velocity changes that respond() would add for these impulses, without changing the
-  // rod (dv = A^-1 p / h^2).
+  // The change of respond()'s node velocities when its impulses change by these, without changing
+  // the rod (dv = A^-1 p / h^2: linear, the prediction does not enter).
   void response(const Rod& rod, const std::vector<Vec3>& impulses, double h, std::vector<Vec3>* dv);
   bool has_prediction() const { return !predicted_.empty(); }
   // The state at the start of the last step.
@@ -83,7 +83,8 @@ class ImplicitEuler {
   void project_gradient(Eigen::VectorXd* g) const;
   void record_reactions(Rod& rod);
   bool ensure_factor(const Rod& rod, double h);
-  void solve_impulses(const std::vector<Vec3>& impulses, double h);  // into z_
+  // Into z_; predicted: less the impulses the step already included.
+  void solve_impulses(const std::vector<Vec3>& impulses, double h, bool predicted);
 
   ImplicitOptions opt_;
   std::vector<Vec3> x0_, v0_, xhat_, xs_;

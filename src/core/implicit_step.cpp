@@ -451,11 +451,11 @@ bool ImplicitEuler::ensure_factor(const Rod& rod, double h) {
   return factored_;
 }
 
-void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h) {
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, double h, bool predicted) {
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
-  if (!predicted_.empty())
+  if (predicted && !predicted_.empty())
     for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
   project_gradient(&z_);
   solver_.solve(&z_);
@@ -467,7 +467,7 @@ void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses, 
   const int nn = rod.num_nodes();
   dv->assign(nn, Vec3::Zero());
   if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
+  solve_impulses(impulses, h, false);
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
@@ -482,7 +482,7 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses, double 
   v = v_free_;
   w = w_free_;
   if (!ensure_factor(rod, h)) return;
-  solve_impulses(impulses, h);
+  solve_impulses(impulses, h, true);
   for (int i = 0; i < nn; ++i) {
     if (kind_[2 * i] == 1) continue;
     x[i] += z_.segment<3>(6 * i);
