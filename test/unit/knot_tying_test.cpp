@@ -88,9 +88,14 @@ TieRun run_tie(const std::vector<std::string>& overrides, double end) {
       run.loop_tied = off_line_max(rod);
     }
     const double t = w.time();
-    if (right && t > kTied && t <= kTied + 5.0)
-      early += support_reaction(rod, *right).force.x(), ++n_early;
-    if (right && t > end - 5.0) late += support_reaction(rod, *right).force.x(), ++n_late;
+    if (right && t > kTied && t <= kTied + 5.0) {
+      early += support_reaction(rod, *right).force.x();
+      ++n_early;
+    }
+    if (right && t > end - 5.0) {
+      late += support_reaction(rod, *right).force.x();
+      ++n_late;
+    }
   }
   EXPECT_TRUE(w.finite());
   run.end = determinants(rod);
