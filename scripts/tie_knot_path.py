@@ -41,7 +41,7 @@ def cross(a, b): return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a
 
 
 def catmull_rom(points, samples=40):
-    """Centripetal-free uniform Catmull-Rom through the points, ends extended linearly."""
+    """Uniform Catmull-Rom spline through the points (the end tangents from mirrored points)."""
     p = [add(points[0], sub(points[0], points[1]))] + list(points) + [add(points[-1], sub(points[-1], points[-2]))]
     out = []
     for i in range(1, len(p) - 2):
@@ -86,8 +86,8 @@ def keyframes(waypoints, speed, every, start_time):
     d3 = (1.0, 0.0, 0.0)  # the rope's tangent at the end at t = 0
     d1 = (0.0, 0.0, 1.0)
     rows, seg = [], 0
-    # The rod's initial frame along x: find it as the straight shape makes it (d3 = x); d1, d2 are
-    # carried by parallel transport from the start, so only their change matters.
+    # d1, d2 start as the straight rod's frame (d1 = z, d2 = -y, d3 = x) and are carried along the
+    # curve by parallel transport, so the holder never turns the end about its tangent.
     for k in range(1, n + 1):
         s = total * k / n
         while seg < len(cum) - 2 and cum[seg + 1] < s:
