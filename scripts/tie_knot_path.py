@@ -8,9 +8,12 @@ part, comes up through the loop and leaves to the right over the bight. The end 
 tangent d3 follows the curve's direction (the end leads, the rope trails) and its frame is
 carried along the curve by parallel transport, so the holder puts no twist into the rope.
 
-    scripts/tie_knot_path.py [--speed 0.04] [--every 0.25] [--control] > tie_knot_right.csv
+    scripts/tie_knot_path.py > config/scenes/tie_overhand_knot_right.csv
+    scripts/tie_knot_path.py --control > config/scenes/tie_overhand_knot_control.csv
+    options: [--speed 0.04] [--every 0.25] [--settle 2] [--pull 40]
 
-prints the keyframe CSV (time, x, y, z, qx, qy, qz, qw) for the grasp `right`. --control
+prints the keyframe CSV (time, x, y, z, qx, qy, qz, qw) for the grasp `right`: the path at
+constant speed, a rest of --settle s, then --pull s along +x at 3 mm/s. --control
 misses the loop: the end comes up beside the loop instead of through it (an unknot). Plain
 python3, no numpy.
 """
