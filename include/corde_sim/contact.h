@@ -41,9 +41,6 @@ struct ContactSettings {
   // Implicit integrator: rounds of sweeps, each followed by the rods' true (stiffness-coupled)
   // response to the impulses (ContactSystem::solve_implicit).
   int implicit_rounds = 30;          // at most
-  int implicit_sweeps = 3;           // Gauss-Seidel sweeps per round: their node-mass model is
-                                     // only a guess of the rod's response, which the round
-                                     // corrects, so converging it fully is wasted work
   double implicit_tolerance = 1e-3;  // rounds stop once no contact closes past its target by more
                                      // than this fraction of the rod's radius over the step
   double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change
@@ -71,7 +68,6 @@ struct ContactStats {
   double max_penetration = 0.0;  // largest -gap at detection (m, >= 0)
   int candidate_pairs = 0;       // segment pairs the broad phase passed to the narrow phase
   int iterations = 0;            // Gauss-Seidel sweeps done (they stop once converged)
-  int rounds = 0;                // implicit: rounds of sweeps and rod response
 };
 
 // The contact stage of World::step: detection and the constraint solve. Holds the scratch and the
@@ -155,7 +151,6 @@ class ContactSystem {
   };
   std::vector<Previous> previous_;
   std::vector<Previous> old_;  // implicit: the impulses before a round's sweeps
-  std::vector<Vec3> clip_;     // implicit: per contact, what a round's projection took off
 };
 
 }  // namespace corde

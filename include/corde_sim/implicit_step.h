@@ -92,8 +92,8 @@ class ImplicitEuler {
   // coupling of A. Kinematic and constrained items respond only where they are free. Calling it
   // again replaces the previous response.
   void respond(Rod& rod, const std::vector<Vec3>& impulses);
-  // The change of respond()'s node velocities when its impulses change by these, without changing
-  // the rod (dv = A^-1 p / b^2: linear, the prediction does not enter).
+  // The node velocity changes that respond() would add for these impulses, without changing the
+  // rod (dv = A^-1 p / b^2).
   void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv);
   // The last step's effective step b (s).
   double effective_step() const { return beta_; }
@@ -114,8 +114,7 @@ class ImplicitEuler {
   void project_gradient(Eigen::VectorXd* g) const;
   void record_reactions(Rod& rod);
   bool ensure_factor(const Rod& rod);
-  // Into z_; predicted: less the impulses the step already included.
-  void solve_impulses(const std::vector<Vec3>& impulses, bool predicted);
+  void solve_impulses(const std::vector<Vec3>& impulses);  // into z_
   bool history_usable(const Rod& rod, double h) const;
   void remember_end(const Rod& rod);
 

@@ -22,12 +22,6 @@ std::uint64_t pair_key(const Contact& c) {
          (where << 41) ^ other;
 }
 
-// A contact that carries an impulse inside its friction cone (not sliding on its rim): its
-// surfaces should not slip over the step.
-bool sticking(const Contact& c) {
-  return c.pn > 0.0 && c.mu > 0.0 && c.pt.squaredNorm() < 0.99 * (c.mu * c.pn) * (c.mu * c.pn);
-}
-
 // Cell coordinates packed in 21 bits each (offset so that negatives fit).
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
   const std::int64_t o = 1 << 20;
@@ -159,7 +153,6 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   };
   respond_all();
   old_.resize(nc);
-  clip_.resize(nc);
   stats_.iterations = 0;
   // How far the true velocities leave a contact closing past its target over the step, in units
   // of the rod's radius.
@@ -171,31 +164,17 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
                                 c.s_b * velocity_[c.rod_b][c.seg_b + 1])
                          : c.surface_velocity;
-      const double vn = vr.dot(c.normal), closing = normal_target(c, cs, h) - vn;
-      double slip = 0.0;
-      if (sticking(c)) slip = (vr - vn * c.normal).norm();
-      worst = std::max(worst, h * std::max(closing, slip) / rods[c.rod_a].section().radius);
+      const double closing = normal_target(c, cs, h) - vr.dot(c.normal);
+      worst = std::max(worst, h * closing / rods[c.rod_a].section().radius);
     }
     return worst;
   };
-  // Node velocities respond linearly to the impulses, so a round updates them from the response
-  // to its change alone (one solve, no rotations) and the rods' full state is set once at the
-  // end.
-  auto add_response = [&](double scale) {
-    for (int r = 0; r < nr; ++r) {
-      if (!touched_[r]) continue;
-      steppers[r].response(rods[r], impulse_[r], &change_v_[r]);
-      for (size_t i = 0; i < velocity_[r].size(); ++i) velocity_[r][i] += scale * change_v_[r][i];
-    }
-  };
-  bool changed = false;
   for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
     if (round > 0 && violation() <= cs.implicit_tolerance) break;
-    ++stats_.rounds;
     for (size_t k = 0; k < nc; ++k) old_[k] = {0, contacts_[k].pn, contacts_[k].pt};
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) held_v_[r] = velocity_[r];  // the true velocities
-    sweep(cs, h, cs.implicit_sweeps);
+    sweep(cs, h, cs.iterations);
     double change = 0.0, largest = 0.0;
     for (size_t k = 0; k < nc; ++k) {
       const Contact& c = contacts_[k];
@@ -208,7 +187,6 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
         if (touched_[r]) velocity_[r] = held_v_[r];
       break;
     }
-    changed = true;
     gather([&](size_t k) {
       const Contact& c = contacts_[k];
       return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
@@ -232,38 +210,19 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       const double res = vr.dot(c.normal) - normal_target(c, cs, h), dres = dv.dot(c.normal);
       num += res * dres;
       den += dres * dres;
-      if (sticking(c)) {  // and its slip
-        const Vec3 rt = vr - c.normal * c.normal.dot(vr), dt = dv - c.normal * c.normal.dot(dv);
-        num += rt.dot(dt);
-        den += dt.squaredNorm();
-      }
     }
     const double alpha = den > 0.0 ? std::clamp(-num / den, 1.0, cs.max_round_scale) : 1.0;
-    bool clipped = false;
     for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
-      const double pn = old_[k].pn + alpha * (c.pn - old_[k].pn);
-      const Vec3 pt = old_[k].pt + alpha * (c.pt - old_[k].pt);
-      c.pn = std::max(0.0, pn);
-      Vec3 p = pt - c.normal * c.normal.dot(pt);
-      const double limit = c.mu * c.pn, norm = p.norm();
-      if (norm > limit) p *= limit / norm;
-      c.pt = p;
-      // What the projection took off the scaled change (answered by one more solve).
-      clip_[k] = c.pn * c.normal + c.pt - pn * c.normal - pt;
-      clipped = clipped || clip_[k] != Vec3::Zero();
+      c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn));
+      Vec3 pt = old_[k].pt + alpha * (c.pt - old_[k].pt);
+      pt -= c.normal * c.normal.dot(pt);
+      const double limit = c.mu * c.pn, norm = pt.norm();
+      if (norm > limit) pt *= limit / norm;
+      c.pt = pt;
     }
-    for (int r = 0; r < nr; ++r)
-      if (touched_[r])
-        for (size_t i = 0; i < velocity_[r].size(); ++i)
-          velocity_[r][i] = held_v_[r][i] + alpha * change_v_[r][i];
-    if (clipped) {
-      gather([&](size_t k) { return clip_[k]; });
-      add_response(1.0);
-    }
+    respond_all();
   }
-  // The rods' state (and the totals in impulse_) for the final impulses.
-  if (changed) respond_all();
   // Remembered per rod, as the next step's prediction.
   last_impulse_.resize(nr);
   for (int r = 0; r < nr; ++r) {

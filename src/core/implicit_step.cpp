@@ -549,12 +549,12 @@ bool ImplicitEuler::ensure_factor(const Rod& rod) {
   return factored_;
 }
 
-void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses, bool predicted) {
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses) {
   const double h = beta_;
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
-  if (predicted && !predicted_.empty())
+  if (!predicted_.empty())
     for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
   project_gradient(&z_);
   solver_.solve(&z_);
@@ -567,7 +567,7 @@ void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
   const double h = beta_;
   dv->assign(nn, Vec3::Zero());
   if (!ensure_factor(rod)) return;
-  solve_impulses(impulses, false);
+  solve_impulses(impulses);
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
@@ -583,7 +583,7 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses) {
   v = v_free_;
   w = w_free_;
   if (ensure_factor(rod)) {
-    solve_impulses(impulses, true);
+    solve_impulses(impulses);
     for (int i = 0; i < nn; ++i) {
       if (kind_[2 * i] == 1) continue;
       x[i] += z_.segment<3>(6 * i);

@@ -41,9 +41,8 @@
 // BM_Statics/N/fd: solve_statics of a steel cantilever sagging under its weight, analytic
 // Hessian (fd = 0) against the former finite-difference Hessian (fd = 1).
 // BM_RopeOnFloorSelfContactImplicit/h_us: the coiled rope with the implicit integrator at that
-// step, timed once it is settled; BM_RopeUncoilImplicit/h_us: its whole run (see there).
-// BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned at
-// one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported);
+// step. BM_ImplicitEulerStep/N: one backward Euler step (ImplicitEuler) of a 1 m steel cable pinned
+// at one end and swinging down from horizontal, h = 2 ms (Newton iterations per step reported);
 // BM_Bdf2Step/N: the same with BDF2 (one step is one 2 ms frame).
 // BM_StaticsMode/scene and BM_DynamicRelaxation/scene: statics as a mode (solve_scene_statics)
 // against dynamic relaxation (viscous) run until the forces vanish to the same tolerance,
@@ -396,62 +395,6 @@ BENCHMARK(BM_RopeOnFloorSelfContactImplicit)
     ->Arg(1000)
     ->Arg(2000)
     ->Unit(benchmark::kMicrosecond);
-
-// The whole run of that scene with the implicit integrator at h_us (argument): from the coiled,
-// pre-stressed start (it springs open, slides and uncoils on the floor) for kUncoilRun seconds,
-// per iteration. us_per_step is the mean over the whole run (real_time_x from it); uncoil_s is when
-// the rope comes to rest (the last step at which a node moves faster than 1 mm/s); uncoil_us and
-// rest_us are the mean step before and after; rounds_max the most contact rounds in a step;
-// max_pen_r the deepest overlap found over the run, in radii. Step times are thread CPU time.
-constexpr double kUncoilRun = 3.0;
-
-double thread_seconds() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-void BM_RopeUncoilImplicit(benchmark::State& state) {
-  const double h = state.range(0) * 1e-6;
-  const long steps = std::lround(kUncoilRun / h);
-  std::vector<double> cost(steps);
-  double uncoil = 0.0, pen = 0.0;
-  int rounds = 0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    corde::Scene scene = rope_on_floor(100, true);
-    corde::World& world = scene.world;
-    world.integrator = corde::Integrator::kImplicitEuler;
-    world.time_step = h;
-    state.ResumeTiming();
-    long last_moving = -1;
-    for (long k = 0; k < steps; ++k) {
-      const double a = thread_seconds();
-      world.step();
-      cost[k] = thread_seconds() - a;
-      double v = 0.0;
-      for (const Vec3& u : world.rods()[0].velocities()) v = std::max(v, u.norm());
-      if (v > 1e-3) last_moving = k;
-      pen = std::max(pen, world.contacts()->stats().max_penetration);
-      rounds = std::max(rounds, world.contacts()->stats().rounds);
-    }
-    uncoil = (last_moving + 1) * h;
-    if (!world.finite()) return state.SkipWithError("the rope blew up (non-finite state)");
-  }
-  const long moving = std::lround(uncoil / h);
-  double all = 0.0, before = 0.0;
-  for (long k = 0; k < steps; ++k) (k < moving ? before : all) += cost[k];
-  all += before;
-  state.counters["us_per_step"] = 1e6 * all / steps;
-  state.counters["real_time_x"] = all > 0.0 ? kUncoilRun / all : 0.0;
-  state.counters["uncoil_s"] = uncoil;
-  state.counters["uncoil_us"] = moving > 0 ? 1e6 * before / moving : 0.0;
-  state.counters["rest_us"] = steps > moving ? 1e6 * (all - before) / (steps - moving) : 0.0;
-  state.counters["rounds_max"] = rounds;
-  state.counters["max_pen_r"] = pen / 0.005;
-}
-
-BENCHMARK(BM_RopeUncoilImplicit)->Arg(2000)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // Cost against n: the coiled rope of n elements of 1 cm on the floor; second argument 1 = self
 // contact on, 0 = floor only.
