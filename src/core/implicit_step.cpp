@@ -504,8 +504,12 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   }
   // Forces whose round-off exceeds a thousandth of the loads cannot resolve the motion (a
   // stiffness beyond double precision at this resolution): the step would "converge" without
-  // moving. Reported as not converged, with that floor as the residual.
-  if (floor > 1e-3 * ref) {
+  // moving. Reported as not converged, with that floor as the residual. The loads are taken as at
+  // least the rod's weight under 1 g: a rod at rest and unloaded (no gravity, a load ramped from
+  // zero) rightly stays put, while a stiffness whose round-off outweighs the rod is still refused.
+  double weight = 0.0;
+  for (double m : rod.node_masses()) weight += 9.81 * m;
+  if (floor > 1e-3 * std::max(ref, weight)) {
     res.converged = false;
     res.residual = std::max(res.residual, floor);
   }
