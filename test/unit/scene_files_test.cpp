@@ -6,33 +6,18 @@
 #include <string>
 #include <vector>
 
-#include "corde_sim/grasp.h"
 #include "corde_sim/material.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/scene_runner.h"
 #include "corde_sim/stability.h"
-#include "corde_sim/step_guard.h"
-
-#ifndef CORDE_SIM_SOURCE_DIR
-// Fallback when built without CMake's definition: this file is <root>/test/unit/.
-#define CORDE_SIM_SOURCE_DIR \
-  (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string())
-#endif
+#include "scene_list.h"
 
 namespace corde {
 namespace {
 
-std::vector<std::string> scene_files() {
-  std::vector<std::string> files;
-  const std::filesystem::path dir = std::filesystem::path(CORDE_SIM_SOURCE_DIR) / "config/scenes";
-  for (const auto& entry : std::filesystem::directory_iterator(dir))
-    if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
 TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
   std::vector<std::string> names;
-  for (const std::string& f : scene_files())
+  for (const std::string& f : shipped_scene_files())
     names.push_back(std::filesystem::path(f).stem().string());
   for (const char* want :
        {"default", "coiling_50", "coiling_100", "coiling_1000", "preshaped_spring",
@@ -43,7 +28,7 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
 }
 
 TEST(SceneFiles, EveryFileParsesAndRuns) {
-  const std::vector<std::string> files = scene_files();
+  const std::vector<std::string> files = shipped_scene_files();
   ASSERT_FALSE(files.empty());
   for (const std::string& f : files) {
     SCOPED_TRACE(f);
@@ -80,15 +65,11 @@ TEST(SceneFiles, DefaultSceneIsTheRealCordAtTwoMilliseconds) {
   const Rod& rod = s.world.rods()[0];
   EXPECT_DOUBLE_EQ(rod.section().stretch, real.stretch);
   EXPECT_DOUBLE_EQ(rod.section().kappa, real.kappa);
-  for (const GraspSpec& spec : s.grasps) {
-    Rod& r = s.world.rod(spec.rod);
-    const Eigen::Isometry3d holder = segment_pose(r, grasp_segment(r, spec));
-    hold(r, make_grasp(r, spec, holder), holder);
-  }
-  StepGuard guard;
-  guard.reset(s.world);
-  ASSERT_TRUE(guard.step(&s.world, 1000));  // 2 s
-  EXPECT_TRUE(guard.events().empty());
+  RunOptions o;
+  o.duration = 2.0;  // holds the grasp as corde_run does, through the stability guard
+  const RunResult r = run_scene(&s, o);
+  ASSERT_TRUE(r.ok) << r.problem;
+  EXPECT_TRUE(r.guard_events.empty());
   const WorldEnergies e = s.world.energies();
   EXPECT_LT(e.kinetic(), 1e-3 * e.elastic());  // at rest (damped by friction and the method)
 }

@@ -5,36 +5,22 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <filesystem>
 #include <string>
 #include <vector>
 
 #include "corde_sim/rod.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/scene_runner.h"
-
-#ifndef CORDE_SIM_SOURCE_DIR
-#define CORDE_SIM_SOURCE_DIR \
-  (std::filesystem::path(__FILE__).parent_path().parent_path().parent_path().string())
-#endif
+#include "scene_list.h"
 
 namespace corde {
 namespace {
-
-std::vector<std::string> shipped_scenes() {
-  std::vector<std::string> files;
-  const std::filesystem::path dir = std::filesystem::path(CORDE_SIM_SOURCE_DIR) / "config/scenes";
-  for (const auto& entry : std::filesystem::directory_iterator(dir))
-    if (entry.path().extension() == ".yaml") files.push_back(entry.path().string());
-  std::sort(files.begin(), files.end());
-  return files;
-}
 
 class SceneMethods : public ::testing::TestWithParam<Integrator> {};
 
 TEST_P(SceneMethods, EveryShippedSceneRunsWithThisMethod) {
   const Integrator method = GetParam();
-  const std::vector<std::string> files = shipped_scenes();
+  const std::vector<std::string> files = shipped_scene_files();
   ASSERT_GE(files.size(), 17u);
   for (const std::string& f : files) {
     SCOPED_TRACE(f);
