@@ -235,8 +235,11 @@ GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const
   *energies = e;
   if (settings_.energy_tolerance <= 0.0) return p;
   const double rise = e.kinetic() + e.elastic() + e.total.gravity - snap_energy_;
-  const double allowed =
-      work_ + settings_.energy_tolerance * snap_scale_ + settings_.energy_floor * mgl_ + 1e-12;
+  // The work is summed to first order (each step's reaction times the end-of-step velocity), so
+  // the energy it brings in carries the integrator's relative error as the energy at the
+  // snapshot does: the tolerance covers both.
+  const double allowed = work_ + settings_.energy_tolerance * (snap_scale_ + work_) +
+                         settings_.energy_floor * mgl_ + 1e-12;
   if (rise > allowed) {
     p.found = true;
     p.kind = GuardEvent::Kind::kEnergy;

@@ -58,7 +58,15 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   guard_settings.max_speed = params_.max_node_speed;
   guard_settings.max_angular_speed = params_.max_angular_speed;
   guard_.set_settings(guard_settings);
-  guard_.set_hooks([this] { guard_grasps_ = grasps_; }, [this] { grasps_ = guard_grasps_; });
+  guard_.set_hooks(
+      [this] {
+        guard_grasps_ = grasps_;
+        grasp_commands_.clear();
+      },
+      [this] {
+        grasps_ = guard_grasps_;
+        grasp_commands_.rewind();  // the inputs since the snapshot are not lost
+      });
   step_fn_ = [this](corde::World* w) { step_once(w); };
   corde::Scene scene;
   std::string resolve_error;
@@ -155,6 +163,7 @@ void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &
 
 void SimNode::step_once(corde::World* world) {
   const double h = world->time_step;  // the guard's, while it runs a halved step
+  if (grasp_commands_.pending() > 0) grasp_commands_.replay(grasps_, *world, world->time(), h);
   if (!scripted_.empty()) drive_scripted(world->time(), h);
   if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h);
   if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);

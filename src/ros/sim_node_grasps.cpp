@@ -392,11 +392,12 @@ void SimNode::update_tf_holders() {
     if (w.script) end_script(kv.first, ("follows tf frame '" + w.frame + "' from now on").c_str());
     if (!w.attached) {
       grasps_.attach(world_, kv.first, f, w.snap ? &w.offset : nullptr, world_.time());
+      guard_.mark_good(world_);  // a rollback goes back to the attached grasp, not to before it
       w.attached = true;
       ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", kv.first.c_str(), w.frame.c_str());
     } else {
       const double interval = w.last_input_time < 0.0 ? 0.0 : stamp - w.last_input_time;
-      grasps_.set_goal(kv.first, world_.time(), f, ros_to_sim_interval(interval));
+      grasp_commands_.set_goal(grasps_, kv.first, world_.time(), f, ros_to_sim_interval(interval));
     }
     w.last_input_time = stamp;
   }
@@ -501,14 +502,14 @@ void SimNode::apply_inputs() {
             last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
         last = e.input_time;
         if (w->second.script) end_script(e.grasp, "follows its pose input from now on");
-        grasps_.set_goal(e.grasp, world_.time(), e.pose, interval);
+        grasp_commands_.set_goal(grasps_, e.grasp, world_.time(), e.pose, interval);
         break;
       }
       case InputEvent::Kind::kWrench:
-        grasps_.set_wrench(world_, e.grasp, e.force, e.torque);
+        grasp_commands_.set_wrench(grasps_, world_, e.grasp, e.force, e.torque);
         break;
       case InputEvent::Kind::kTwistRate:
-        grasps_.set_twist_rate(e.grasp, e.rate);
+        grasp_commands_.set_twist_rate(grasps_, world_, e.grasp, e.rate);
         break;
     }
   }

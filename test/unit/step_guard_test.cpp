@@ -13,6 +13,9 @@
 #include <string>
 #include <vector>
 
+#include "corde_sim/grasp.h"
+#include "corde_sim/grasp_commands.h"
+#include "corde_sim/grasp_set.h"
 #include "corde_sim/scene.h"
 #include "corde_sim/scene_runner.h"
 #include "corde_sim/stability.h"
@@ -348,6 +351,98 @@ TEST(StepGuard, ShippedScenesRunWithoutEvents) {
     const RunResult r = run_scene(&s, o);
     EXPECT_TRUE(r.ok) << r.problem;
     for (const GuardEvent& e : r.guard_events) ADD_FAILURE() << e.message();
+  }
+}
+
+// A grasp pulled 7.5 cm back towards the clamp over 0.1 s (the node's first pose input on its
+// rostest rope, at its default holder limits) does work on the rope that the window counts only
+// to first order (its reaction times the holder's speed at the end of each step): the rise
+// exceeded that sum by 0.6 % and the guard rolled back a good run (frames_errors rostest, CI of
+// stop 15). Tried at several check phases, since the margin depends on where the window falls.
+TEST(StepGuard, GraspPullIsWorkNotGrowth) {
+  for (int phase : {0, 2, 17, 40}) {
+    SCOPED_TRACE(phase);
+    Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
+    World& w = s.world;
+    GraspSet grasps;
+    const GraspSpec& spec = s.grasps.at(0);
+    int rod = 0, seg = 0;
+    ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
+    ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+    StepGuard guard;
+    guard.reset(w);
+    const StepGuard::StepFn fn = [&](World* world) {
+      grasps.before_step(*world, world->time(), world->time_step);
+      world->step();
+      grasps.after_step(*world, world->time_step);
+    };
+    ASSERT_TRUE(guard.step(&w, phase + 2, fn));
+    Eigen::Isometry3d goal = segment_pose(w.rods()[rod], seg);
+    goal.translation() = Vec3(0.4, 0.0, 1.0);
+    grasps.set_goal(spec.name, w.time(), goal, 0.1);
+    ASSERT_TRUE(guard.step(&w, 2000, fn));
+    for (const GuardEvent& e : guard.events()) ADD_FAILURE() << e.message();
+    EXPECT_LT((segment_pose(w.rods()[rod], seg).translation() - goal.translation()).norm(), 1e-6);
+  }
+}
+
+// Inputs since the snapshot survive a rollback: two goals sent to a grasp, then a fault (a NaN
+// put into the rope once, as a blow-up would) that sends the world back to before both. The
+// command log applies them again at their times, and the rope ends where the last goal put it;
+// the grasps alone, as restored, would have forgotten them (frames_errors rostest, CI of stop
+// 15: the rope stayed where it was).
+TEST(StepGuard, RollbackKeepsTheInputsSinceTheSnapshot) {
+  for (bool with_log : {true, false}) {
+    SCOPED_TRACE(with_log);
+    Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
+    World& w = s.world;
+    GraspSet grasps, saved;
+    GraspCommandLog log;
+    const GraspSpec& spec = s.grasps.at(0);
+    int rod = 0, seg = 0;
+    ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
+    ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+    StepGuard guard;
+    guard.set_hooks(
+        [&] {
+          saved = grasps;
+          log.clear();
+        },
+        [&] {
+          grasps = saved;
+          if (with_log) log.rewind();
+        });
+    guard.reset(w);
+    bool faulted = false;
+    const StepGuard::StepFn fn = [&](World* world) {
+      log.replay(grasps, *world, world->time(), world->time_step);
+      grasps.before_step(*world, world->time(), world->time_step);
+      world->step();
+      grasps.after_step(*world, world->time_step);
+      if (!faulted && world->time() >= 0.01) {
+        faulted = true;
+        world->rods()[0].velocities()[3].x() = std::nan("");
+      }
+    };
+    const Eigen::Isometry3d start = segment_pose(w.rods()[rod], seg);
+    Eigen::Isometry3d goal = start;
+    ASSERT_TRUE(guard.step(&w, 2, fn));
+    goal.translation() = Vec3(0.45, 0.0, 1.0);
+    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
+    ASSERT_TRUE(guard.step(&w, 18, fn));
+    goal.translation() = Vec3(0.4, 0.0, 1.02);
+    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
+    EXPECT_EQ(log.size(), 2u);
+    ASSERT_TRUE(guard.step(&w, 2000, fn));
+    ASSERT_TRUE(faulted);
+    ASSERT_FALSE(guard.events().empty());
+    EXPECT_EQ(guard.events().front().kind, Kind::kNonFinite);
+    EXPECT_EQ(guard.events().front().rollback_to, 0.0);
+    const Vec3 end = segment_pose(w.rods()[rod], seg).translation();
+    if (with_log)
+      EXPECT_LT((end - goal.translation()).norm(), 1e-6) << end.transpose();
+    else  // what the node did before the log
+      EXPECT_LT((end - start.translation()).norm(), 1e-6) << end.transpose();
   }
 }
 

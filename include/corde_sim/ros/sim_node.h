@@ -33,6 +33,7 @@
 #include "corde_sim/Step.h"
 #include "corde_sim/WorldState.h"
 #include "corde_sim/grasp.h"
+#include "corde_sim/grasp_commands.h"
 #include "corde_sim/grasp_set.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_events.h"
@@ -174,6 +175,8 @@ class SimNode {
   InputQueue inputs_;
   corde::StepGuard guard_;
   corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
+  // Inputs applied since the guard's snapshot, applied again after a rollback.
+  corde::GraspCommandLog grasp_commands_;
   corde::StepGuard::StepFn step_fn_;
   SimSettings settings_;
   int next_marker_id_ = 0;
