@@ -115,7 +115,8 @@ class ContactSystem {
   // Scratch, reused across steps.
   std::vector<std::vector<Vec3>> velocity_;  // per rod: predicted node velocities
   std::vector<std::vector<double>> inv_mass_;
-  std::vector<double> scratch_w_;  // per contact: the pair's inverse mass
+  std::vector<double> scratch_w_;      // per contact: the pair's inverse mass
+  std::vector<double> scratch_inv_w_;  // and its inverse (0 where the pair cannot move)
   std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
   std::vector<char> touched_;
   std::vector<std::vector<Vec3>> last_impulse_;  // implicit: per rod, the last step's totals

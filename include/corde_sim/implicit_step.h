@@ -59,6 +59,13 @@ struct ImplicitOptions {
   // momentum and weight scale sum_i m_i (|g| + |v_i| / h), or reaches the round-off floor of
   // the forces (stiff stretch and penalty set it).
   double tolerance = 1e-8;
+  // Reuse of the factorised Newton matrix (a chord iteration): it is kept from an earlier
+  // iteration or step while no element's direction and no segment's orientation has turned by
+  // more than this angle (rad) since it was factorised, and the step size and the supports are
+  // the same. An iteration on a kept factor that does not at least halve the residual makes the
+  // next one factorise afresh. 0: factorise at every iteration (Newton's method proper). The
+  // result meets the same tolerance either way; only the path to it changes.
+  double reuse_factor = 0.01;
 };
 
 struct ImplicitResult {
@@ -102,6 +109,8 @@ class ImplicitEuler {
   const std::vector<Vec3>& start_positions() const { return x0_; }
   const std::vector<Vec3>& start_velocities() const { return v0_; }
   const ImplicitOptions& options() const { return opt_; }
+  // Factorisations of the Newton matrix so far (for tests and benchmarks of reuse_factor).
+  long factorisations() const { return factorisations_; }
   void set_options(const ImplicitOptions& o) { opt_ = o; }
 
  private:
@@ -114,6 +123,13 @@ class ImplicitEuler {
   void project_gradient(Eigen::VectorXd* g) const;
   void record_reactions(Rod& rod);
   bool ensure_factor(const Rod& rod);
+  // Assembles and factorises at the rod's state (false: not positive definite).
+  bool refactor(const Rod& rod, const RodSystem& sys, double h);
+  // Whether the kept factorisation may stand for the matrix at the rod's state now.
+  bool factor_reusable(const Rod& rod);
+  // The rod's parameters that enter the Newton matrix (section, drag, rest lengths, masses,
+  // inertia, rest strains), flattened, to tell a configured rod from the one factorised.
+  static void parameters(const Rod& rod, std::vector<double>* out);
   void solve_impulses(const std::vector<Vec3>& impulses);  // into z_
   bool history_usable(const Rod& rod, double h) const;
   void remember_end(const Rod& rod);
@@ -154,8 +170,18 @@ class ImplicitEuler {
   std::vector<Vec3> predicted_;  // node impulses the step included (empty: none)
   BlockTridiag a_;
   BlockTridiagSolver solver_;
-  bool factored_ = false;  // solver_ holds a factorisation from this step
+  bool factored_ = false;  // solver_ holds a factorisation usable for this step
+  // The state solver_ was factorised at, to decide whether it can be kept (reuse_factor).
+  bool have_factor_ = false;
+  double factor_beta_ = 0.0;
+  std::vector<Vec3> factor_x_;
+  std::vector<Quat> factor_q_;
+  std::vector<signed char> factor_kind_;
+  std::vector<Mat3> factor_proj_;
+  std::vector<double> factor_params_, params_;  // the rod's parameters then and now (scratch)
+  long factorisations_ = 0;
   Eigen::VectorXd g_, g_trial_, d_, z_;
+  Eigen::VectorXd g_raw_, g_raw_trial_;  // g_ and g_trial_ before the supports' projection
   // The step's result without contacts (for respond()).
   std::vector<Vec3> x_free_, v_free_, w_free_;
   std::vector<Quat> q_free_;

@@ -59,9 +59,8 @@ class BlockTridiagSolver {
   void solve(Eigen::VectorXd* b) const;
 
  private:
-  std::vector<Mat6> l_diag_;    // Cholesky factor of each pivot block (lower triangle used)
-  std::vector<Vec6> inv_diag_;  // inverse of its diagonal
-  std::vector<Mat6> l_lower_;   // L(k + 1, k)
+  std::vector<Mat6> l_inv_;    // inverse of the Cholesky factor of each pivot block (lower)
+  std::vector<Mat6> l_lower_;  // L(k + 1, k)
   int blocks_ = 0;
 };
 

@@ -62,6 +62,9 @@ class World {
   void step();
   // The implicit integrator's solves in the last step (zero for the explicit methods).
   const ImplicitStats& implicit_stats() const { return implicit_stats_; }
+  // Factorisations of the implicit integrator's Newton matrices so far, over all rods (they are
+  // kept while the rods barely move: ImplicitOptions::reuse_factor).
+  long implicit_factorisations() const;
   // The contact stage of the last step (null until a step needed it).
   const ContactSystem* contacts() const { return contacts_.get(); }
   void step(int n) {

@@ -242,6 +242,7 @@ double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs,
 void ContactSystem::prepare_sweeps() {
   std::vector<double>& wsum = scratch_w_;
   wsum.resize(contacts_.size());
+  scratch_inv_w_.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
     const auto& wa = inv_mass_[c.rod_a];
@@ -251,6 +252,7 @@ void ContactSystem::prepare_sweeps() {
       w += (1 - c.s_b) * (1 - c.s_b) * wb[c.seg_b] + c.s_b * c.s_b * wb[c.seg_b + 1];
     }
     wsum[k] = w;
+    scratch_inv_w_[k] = w > 0.0 ? 1.0 / w : 0.0;
     if (w > 0.0) apply_impulse(c, c.pn * c.normal + c.pt);
   }
 }
@@ -269,37 +271,39 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
     return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
   };
   const std::vector<double>& wsum = scratch_w_;
+  const std::vector<double>& inv_w = scratch_inv_w_;  // multiplications instead of divisions
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
   // warm started, settle in a few sweeps), or the iteration limit.
   for (int it = 0; it < iterations; ++it) {
-    double change = 0.0, largest = 0.0;
+    double change2 = 0.0, largest = 0.0;  // the largest change squared
     ++stats_.iterations;
     for (size_t k = 0; k < contacts_.size(); ++k) {
       Contact& c = contacts_[k];
       const double w = wsum[k];
       if (!(w > 0.0)) continue;
+      const double iw = inv_w[k];
       // Relative to the other surface: a rod's, or a (moving) obstacle's.
       Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
       vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
       const double target = normal_target(c, cs, h);
       const double vn = vr.dot(c.normal);
-      const double pn = std::max(0.0, c.pn + (target - vn) / w);
+      const double pn = std::max(0.0, c.pn + (target - vn) * iw);
       Vec3 dp = (pn - c.pn) * c.normal;
       c.pn = pn;
       // Friction: the impulse that stops the sliding, projected onto the Coulomb disc.
       // (An impulse P changes the relative velocity by w P: the pair's inverse mass is a scalar.)
       const Vec3 after = vr + w * dp;
       const Vec3 vt = after - c.normal * after.dot(c.normal);
-      Vec3 pt = c.pt - vt / w;
-      const double limit = c.mu * c.pn, norm = pt.norm();
-      if (norm > limit) pt *= limit / norm;
+      Vec3 pt = c.pt - vt * iw;
+      const double limit = c.mu * c.pn, norm2 = pt.squaredNorm();
+      if (norm2 > limit * limit) pt *= limit / std::sqrt(norm2);
       dp += pt - c.pt;
       c.pt = pt;
       apply_impulse(c, dp);
-      change = std::max(change, dp.norm());
+      change2 = std::max(change2, dp.squaredNorm());
       largest = std::max(largest, c.pn);
     }
-    if (change <= 1e-6 * largest) break;
+    if (change2 <= 1e-12 * largest * largest) break;
   }
 }
 

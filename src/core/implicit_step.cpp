@@ -432,6 +432,10 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
                        (sec.stretch + sec.kappa + (sec.bend + sec.twist) / (lc * lc));
   ImplicitResult res;
   res.reference = ref;
+  const double tolerance = std::max(opt_.tolerance * ref, floor);
+  // Loads whose size overflows (a force of 1e200 N: |F|^2 is infinite) would make the tolerance
+  // infinite and the step "converge" without moving: no step can meet them.
+  const bool finite_loads = std::isfinite(ref);
   auto norm_scaled = [&](const Eigen::VectorXd& g) {
     double r2 = 0.0;
     for (int k = 0; k < nn; ++k) {
@@ -440,26 +444,44 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     }
     return std::sqrt(r2);
   };
-  auto full_gradient = [&](Eigen::VectorXd* g) {
+  // The gradient, kept also before the supports' projection (the reactions at the end).
+  auto full_gradient = [&](Eigen::VectorXd* g, Eigen::VectorXd* raw) {
     gradient(rod, sys, h, g);
+    *raw = *g;
     project_gradient(g);
   };
-  full_gradient(&g_);
-  double phi = merit(rod, sys, h);
-  // Magnitude of the terms Phi sums, for telling its changes from round-off.
-  const double phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
-  for (int it = 0; it < opt_.max_iterations; ++it) {
+  full_gradient(&g_, &g_raw_);
+  // Phi and the magnitude of the terms it sums (for telling its changes from round-off), once an
+  // iteration needs them.
+  double phi = 0.0, phi_scale = 0.0;
+  bool have_phi = false;
+  double last_residual = 0.0;
+  bool last_kept = false;  // the last iteration ran on a kept factorisation
+  for (int it = 0; it < opt_.max_iterations && finite_loads; ++it) {
     res.residual = norm_scaled(g_);
-    if (res.residual <= std::max(opt_.tolerance * ref, floor)) {
+    if (res.residual <= tolerance) {
       res.converged = true;
       break;
     }
-    assemble(rod, sys, h);
+    // A kept factorisation that did not halve the residual is no longer worth keeping.
+    if (last_kept && res.residual > 0.5 * last_residual) factored_ = have_factor_ = false;
+    last_residual = res.residual;
+    if (!have_phi) {
+      phi = merit(rod, sys, h);
+      phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
+      have_phi = true;
+    }
+    const bool kept = factor_reusable(rod);
     ++res.iterations;
-    factored_ = solver_.factor(a_);
-    if (!factored_) break;  // cannot happen with the definite variant and masses > 0
+    if (!kept && !refactor(rod, sys, h)) {  // cannot fail with the definite variant
+      factored_ = false;
+      break;
+    }
+    factored_ = true;
+    last_kept = kept;
     d_ = -g_;
     solver_.solve(&d_);
+    if (kept) project_gradient(&d_);  // the supports' directions may have turned since
     // Backtracking line search (Armijo) on Phi along the retraction.
     const double slope = g_.dot(d_);
     xs_ = x;
@@ -476,15 +498,16 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       if (!std::isfinite(phi_new)) continue;
       if (phi_new <= phi + 1e-4 * alpha * slope) {
         accepted = true;
-        full_gradient(&g_);
+        full_gradient(&g_, &g_raw_);
         break;
       }
       // Near the solution the change of Phi is lost in its round-off: accept a step that lowers
       // the residual instead.
       if (std::abs(phi_new - phi) <= 1e3 * std::numeric_limits<double>::epsilon() * phi_scale) {
-        full_gradient(&g_trial_);
+        full_gradient(&g_trial_, &g_raw_trial_);
         if (norm_scaled(g_trial_) < res.residual) {
           g_.swap(g_trial_);
+          g_raw_.swap(g_raw_trial_);
           accepted = true;
           break;
         }
@@ -493,14 +516,20 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     if (!accepted) {
       x = xs_;
       q = qk_;
-      full_gradient(&g_);
+      for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+      if (kept) {  // a stale direction: try again with the matrix at this iterate
+        factored_ = have_factor_ = false;
+        last_kept = false;
+        continue;
+      }
+      full_gradient(&g_, &g_raw_);
       break;
     }
     phi = phi_new;
   }
   if (!res.converged) {
     res.residual = norm_scaled(g_);
-    res.converged = res.residual <= std::max(opt_.tolerance * ref, floor);
+    res.converged = res.residual <= tolerance;
   }
   // Forces whose round-off exceeds a thousandth of the loads cannot resolve the motion (a
   // stiffness beyond double precision at this resolution): the step would "converge" without
@@ -513,11 +542,15 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     res.converged = false;
     res.residual = std::max(res.residual, floor);
   }
-  // Reactions from the unprojected residual.
-  gradient(rod, sys, h, &g_trial_);
-  g_trial_.swap(g_);
+  if (!finite_loads) {
+    res.converged = false;
+    res.residual = std::numeric_limits<double>::infinity();
+    res.reference = 1.0;
+  }
+  // Reactions from the unprojected residual (the gradient at the final iterate, as kept).
+  g_raw_.swap(g_);
   record_reactions(rod);
-  g_trial_.swap(g_);
+  g_raw_.swap(g_);
   for (int i = 0; i < nn; ++i) v[i] = (x[i] - xt_[i]) / h;
   for (int s = 0; s < ns; ++s) w[s] = (theta_[s] + off_[s]) / h;
   // Drives give their own velocities (as Rod::step's drives do).
@@ -544,13 +577,63 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
 
 bool ImplicitEuler::ensure_factor(const Rod& rod) {
   if (factored_) return true;
-  // Converged without a Newton iteration: factor at the result.
+  // Converged without a Newton iteration: the kept factorisation if it still stands for the
+  // matrix at the result, else one at the result.
+  if (factor_reusable(rod)) return factored_ = true;
   RodSystem sys{&rod, Vec3::Zero(), 0.0};
   sys.definite = true;
   sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;
-  assemble(rod, sys, beta_);
-  factored_ = solver_.factor(a_);
+  factored_ = refactor(rod, sys, beta_);
   return factored_;
+}
+
+bool ImplicitEuler::refactor(const Rod& rod, const RodSystem& sys, double h) {
+  assemble(rod, sys, h);
+  ++factorisations_;
+  have_factor_ = solver_.factor(a_);
+  factor_beta_ = h;
+  factor_x_ = rod.positions();
+  factor_q_ = rod.orientations();
+  factor_kind_ = kind_;
+  factor_proj_ = proj_;
+  parameters(rod, &factor_params_);
+  return have_factor_;
+}
+
+void ImplicitEuler::parameters(const Rod& rod, std::vector<double>* out) {
+  const Section& c = rod.section();
+  const Drag& d = rod.drag();
+  out->assign({c.radius, c.bend, c.twist, c.stretch, c.kappa, c.gamma_t, c.gamma_r,
+               c.mass_per_length, c.inertia_bend, c.inertia_twist, d.linear_normal,
+               d.linear_tangential, d.quadratic_normal, d.quadratic_tangential,
+               rod.rotational_inertia_scale(), rod.ghost_start().active ? 1.0 : 0.0,
+               rod.ghost_end().active ? 1.0 : 0.0});
+  out->insert(out->end(), rod.rest_lengths().begin(), rod.rest_lengths().end());
+  out->insert(out->end(), rod.node_masses().begin(), rod.node_masses().end());
+  for (const Vec3& u : rod.rest_strains()) out->insert(out->end(), u.data(), u.data() + 3);
+}
+
+bool ImplicitEuler::factor_reusable(const Rod& rod) {
+  const double limit = opt_.reuse_factor;
+  if (!(limit > 0.0) || !have_factor_ || beta_ != factor_beta_ || kind_ != factor_kind_)
+    return false;
+  const auto& x = rod.positions();
+  const auto& q = rod.orientations();
+  if (x.size() != factor_x_.size() || q.size() != factor_q_.size()) return false;
+  parameters(rod, &params_);  // a configure may have changed the material, not the shape
+  if (params_ != factor_params_) return false;
+  for (size_t u = 0; u < kind_.size(); ++u)
+    if (kind_[u] == 2 && (proj_[u] - factor_proj_[u]).cwiseAbs().maxCoeff() > limit) return false;
+  // sin of half the angle between two orientations, and an element's turn as its chord's change
+  // over its rest length (both about the angle for small angles).
+  const double half = 0.5 * limit;
+  const auto& rest = rod.rest_lengths();
+  for (size_t s = 0; s < q.size(); ++s) {
+    if ((factor_q_[s].conjugate() * q[s]).vec().norm() > half) return false;
+    if (((x[s + 1] - x[s]) - (factor_x_[s + 1] - factor_x_[s])).norm() > limit * rest[s])
+      return false;
+  }
+  return true;
 }
 
 void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses) {

@@ -136,29 +136,28 @@ bool cholesky6(const Mat6& s, double min_pivot, Mat6* l, Vec6* inv_diag) {
 
 bool BlockTridiagSolver::factor(const BlockTridiag& a, double min_pivot) {
   const int n = a.blocks();
-  if (static_cast<int>(l_diag_.size()) < n) {
-    l_diag_.resize(n);
+  if (static_cast<int>(l_inv_.size()) < n) {
+    l_inv_.resize(n);
     l_lower_.resize(n);
-    inv_diag_.resize(n);
   }
-  Mat6 s;
+  Mat6 s, l;
+  Vec6 inv;
   for (int k = 0; k < n; ++k) {
     s = a.diag[k];
     if (k > 0) s.noalias() -= l_lower_[k - 1] * l_lower_[k - 1].transpose();
-    Mat6& l = l_diag_[k];
-    const Vec6& inv = inv_diag_[k];
-    if (!cholesky6(s, min_pivot, &l, &inv_diag_[k])) return false;
-    if (k + 1 < n) {
-      // C = A_{k+1,k} L^-T: each row c solves L c^T = a^T by forward substitution.
-      Mat6& c = l_lower_[k];
-      const Mat6& ak = a.lower[k];
-      for (int r = 0; r < 6; ++r)
-        for (int j = 0; j < 6; ++j) {
-          double v = ak(r, j);
-          for (int m = 0; m < j; ++m) v -= c(r, m) * l(j, m);
-          c(r, j) = v * inv(j);
-        }
-    }
+    if (!cholesky6(s, min_pivot, &l, &inv)) return false;
+    // L^-1 by forward substitution on the identity: the solves then multiply by it (a product
+    // the compiler vectorises) instead of substituting element by element.
+    Mat6& li = l_inv_[k];
+    li.setZero();
+    for (int c = 0; c < 6; ++c)
+      for (int j = c; j < 6; ++j) {
+        double v = j == c ? 1.0 : 0.0;
+        for (int m = c; m < j; ++m) v -= l(j, m) * li(m, c);
+        li(j, c) = v * inv(j);
+      }
+    // C = A_{k+1,k} L^-T.
+    if (k + 1 < n) l_lower_[k].noalias() = a.lower[k] * li.transpose();
   }
   blocks_ = n;
   return true;
@@ -170,24 +169,12 @@ void BlockTridiagSolver::solve(Eigen::VectorXd* b) const {
   for (int k = 0; k < n; ++k) {
     y = b->segment<6>(6 * k);
     if (k > 0) y.noalias() -= l_lower_[k - 1] * b->segment<6>(6 * k - 6);
-    const Mat6& l = l_diag_[k];
-    for (int j = 0; j < 6; ++j) {
-      double v = y(j);
-      for (int m = 0; m < j; ++m) v -= l(j, m) * y(m);
-      y(j) = v * inv_diag_[k](j);
-    }
-    b->segment<6>(6 * k) = y;
+    b->segment<6>(6 * k).noalias() = l_inv_[k] * y;
   }
   for (int k = n - 1; k >= 0; --k) {
     y = b->segment<6>(6 * k);
     if (k + 1 < n) y.noalias() -= l_lower_[k].transpose() * b->segment<6>(6 * k + 6);
-    const Mat6& l = l_diag_[k];
-    for (int j = 5; j >= 0; --j) {
-      double v = y(j);
-      for (int m = j + 1; m < 6; ++m) v -= l(m, j) * y(m);
-      y(j) = v * inv_diag_[k](j);
-    }
-    b->segment<6>(6 * k) = y;
+    b->segment<6>(6 * k).noalias() = l_inv_[k].transpose() * y;
   }
 }
 

@@ -38,6 +38,12 @@ void World::step() {
   time_ += time_step;
 }
 
+long World::implicit_factorisations() const {
+  long n = 0;
+  for (const ImplicitEuler& e : implicit_) n += e.factorisations();
+  return n;
+}
+
 void World::step_implicit() {
   implicit_.resize(rods_.size());
   implicit_stats_ = ImplicitStats();

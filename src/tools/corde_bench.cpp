@@ -313,7 +313,9 @@ BENCHMARK(BM_WorldStepNoContact)->Arg(100)->Unit(benchmark::kMicrosecond);
 // touch (centre lines 2 r + 0.1 mm apart), self contact on or off; time_step auto. Every element
 // rests on the floor and, with self contact, most touch the next turn: the contact count grows
 // linearly with n.
-corde::Scene rope_on_floor(int n, bool self) {
+// set: the coil is the rope's rest shape (rest_shape: created, a cable that has taken a set), so
+// it stays coiled, its turns within the contact margin of one another.
+corde::Scene rope_on_floor(int n, bool self, bool set = false) {
   const double r = 0.005, l = 0.01, spacing = 2.0 * r + 1e-4, a = 0.03;
   const double b = spacing / (2.0 * M_PI);  // radius = a + b theta
   std::ostringstream y;
@@ -324,6 +326,7 @@ corde::Scene rope_on_floor(int n, bool self) {
     << "rods:\n  - name: rope\n    elements: " << n << "\n    radius: " << r
     << "\n    material: {preset: nylon_rope, E: 1.0e7, E_s: 1.0e7}\n"
     << "    contact: {self: " << (self ? "true" : "false") << "}\n"
+    << (set ? "    rest_shape: created\n" : "")
     << "    shape:\n      type: polyline\n      points:\n";
   // Points about 2 mm apart along the spiral up to the rope's length.
   const double length = n * l;
@@ -342,6 +345,13 @@ corde::Scene rope_on_floor(int n, bool self) {
   // 100 steps first (about 3 ms): contacts found and warm started, as in a running scene.
   scene.world.step(100);
   return scene;
+}
+
+// CPU time of the calling thread (s): the whole-run benchmarks report it beside the wall time.
+double thread_cpu_seconds() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 // Time per World::step (Time, wall), the step (step_us), the real-time factor (simulated seconds
@@ -380,14 +390,23 @@ void BM_RopeOnFloorSelfContact(benchmark::State& state) {
 
 BENCHMARK(BM_RopeOnFloorSelfContact)->Unit(benchmark::kMicrosecond);
 
-// The same rope with the implicit integrator at a step of h_us microseconds (argument).
+// The same rope with the implicit integrator at a step of h_us microseconds (argument), once it
+// lies on the floor: the pre-stressed spiral springs open and slides in its first 1.2 s, so the
+// timing starts after 2 s of it (self contact stays on; the turns have moved apart). newton:
+// iterations of the last step; factorisations_per_step: of the Newton matrix, over the timed
+// steps (ImplicitOptions::reuse_factor keeps it while the rope rests).
 void BM_RopeOnFloorSelfContactImplicit(benchmark::State& state) {
   corde::Scene scene = rope_on_floor(100, true);
-  scene.world.integrator = corde::Integrator::kImplicitEuler;
-  scene.world.time_step = state.range(0) * 1e-6;
-  scene.world.step(200);  // settle the warm start at this step
-  run_world(state, scene.world, 100);
-  state.counters["newton"] = scene.world.implicit_stats().iterations;
+  corde::World& world = scene.world;
+  world.integrator = corde::Integrator::kImplicitEuler;
+  world.time_step = state.range(0) * 1e-6;
+  world.step(static_cast<long>(std::lround(2.0 / world.time_step)));
+  const long f0 = world.implicit_factorisations();
+  run_world(state, world, 100);
+  state.counters["newton"] = world.implicit_stats().iterations;
+  state.counters["factorisations_per_step"] =
+      static_cast<double>(world.implicit_factorisations() - f0) /
+      static_cast<double>(std::max<benchmark::IterationCount>(state.iterations(), 1));
 }
 
 BENCHMARK(BM_RopeOnFloorSelfContactImplicit)
@@ -395,6 +414,62 @@ BENCHMARK(BM_RopeOnFloorSelfContactImplicit)
     ->Arg(1000)
     ->Arg(2000)
     ->Unit(benchmark::kMicrosecond);
+
+// A coil that has set (rest_shape: created) lying on the floor, self contact on, implicit at
+// h = 2 ms after 0.5 s of settling: it stays coiled, about 100 floor contacts and 100 between
+// neighbouring turns within the contact margin.
+void BM_RopeCoilSetImplicit(benchmark::State& state) {
+  corde::Scene scene = rope_on_floor(100, true, true);
+  corde::World& world = scene.world;
+  world.integrator = corde::Integrator::kImplicitEuler;
+  world.time_step = 2e-3;
+  world.step(250);
+  run_world(state, world, 100);
+  state.counters["newton"] = world.implicit_stats().iterations;
+}
+
+BENCHMARK(BM_RopeCoilSetImplicit)->Unit(benchmark::kMicrosecond);
+
+// Whole runs with the implicit integrator at h = 2 ms, one run per iteration: us_per_step is the
+// mean CPU time of a step over the run, real_time_x the simulated time over that CPU time.
+// scene 0: the pre-stressed spiral of BM_RopeOnFloorSelfContact from its start, 3 s (it springs
+// open on itself in the first 0.1 s, slides until about 1.2 s, then lies still). scene 1:
+// config/scenes/rope_pile.yaml, 4 s (the rope lowered into a pile of loops on the floor, self
+// contact throughout).
+void BM_RopeFloorWholeRunImplicit(benchmark::State& state) {
+  double cpu = 0.0;
+  long steps = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::unique_ptr<corde::Scene> scene;
+    double duration = 3.0;
+    if (state.range(0) == 0) {
+      scene = std::make_unique<corde::Scene>(rope_on_floor(100, true));
+    } else {
+      scene = std::make_unique<corde::Scene>(
+          corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/rope_pile.yaml"));
+      duration = scene->duration;
+    }
+    corde::World& world = scene->world;
+    world.integrator = corde::Integrator::kImplicitEuler;
+    world.time_step = 2e-3;
+    const long n = std::lround(duration / world.time_step);
+    state.ResumeTiming();
+    const double c0 = thread_cpu_seconds();
+    world.step(n);
+    cpu += thread_cpu_seconds() - c0;
+    steps += n;
+    if (!world.finite()) state.SkipWithError("the rope blew up (non-finite state)");
+  }
+  state.counters["us_per_step"] = steps > 0 ? 1e6 * cpu / static_cast<double>(steps) : 0.0;
+  state.counters["real_time_x"] = cpu > 0.0 ? 2e-3 * static_cast<double>(steps) / cpu : 0.0;
+}
+
+BENCHMARK(BM_RopeFloorWholeRunImplicit)
+    ->Arg(0)
+    ->Arg(1)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // Cost against n: the coiled rope of n elements of 1 cm on the floor; second argument 1 = self
 // contact on, 0 = floor only.
