@@ -62,9 +62,12 @@ struct ImplicitOptions {
   // Reuse of the factorised Newton matrix (a chord iteration): it is kept from an earlier
   // iteration or step while no element's direction and no segment's orientation has turned by
   // more than this angle (rad) since it was factorised, and the step size and the supports are
-  // the same. An iteration on a kept factor that does not at least halve the residual makes the
-  // next one factorise afresh. 0: factorise at every iteration (Newton's method proper). The
-  // result meets the same tolerance either way; only the path to it changes.
+  // the same, and the rod's parameters unchanged. An iteration on a kept factor that does not cut
+  // the residual to a quarter makes the next one factorise afresh, and Newton iterations then
+  // factorise every time until a step converges in one or none (a moving rod converges faster with
+  // fresh matrices; a resting one, whose contact response needs the matrix at every step, keeps
+  // one). 0: factorise at every iteration (Newton's method proper). The result meets the same
+  // tolerance either way; only the path to it changes.
   double reuse_factor = 0.01;
 };
 
@@ -180,6 +183,7 @@ class ImplicitEuler {
   std::vector<Mat3> factor_proj_;
   std::vector<double> factor_params_, params_;  // the rod's parameters then and now (scratch)
   long factorisations_ = 0;
+  bool chord_ok_ = true;  // Newton may iterate on a kept factorisation (off after one failed)
   Eigen::VectorXd g_, g_trial_, d_, z_;
   Eigen::VectorXd g_raw_, g_raw_trial_;  // g_ and g_trial_ before the supports' projection
   // The step's result without contacts (for respond()).

@@ -463,15 +463,20 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       res.converged = true;
       break;
     }
-    // A kept factorisation that did not halve the residual is no longer worth keeping.
-    if (last_kept && res.residual > 0.5 * last_residual) factored_ = have_factor_ = false;
+    // A kept factorisation that did not cut the residual to a quarter is no longer worth
+    // keeping, and Newton iterations factorise afresh until a step needs none (the rod moves too
+    // much for chord iterations; the contact response may still keep one).
+    if (last_kept && res.residual > 0.25 * last_residual) {
+      factored_ = have_factor_ = false;
+      chord_ok_ = false;
+    }
     last_residual = res.residual;
     if (!have_phi) {
       phi = merit(rod, sys, h);
       phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
       have_phi = true;
     }
-    const bool kept = factor_reusable(rod);
+    const bool kept = chord_ok_ && factor_reusable(rod);
     ++res.iterations;
     if (!kept && !refactor(rod, sys, h)) {  // cannot fail with the definite variant
       factored_ = false;
@@ -520,6 +525,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       if (kept) {  // a stale direction: try again with the matrix at this iterate
         factored_ = have_factor_ = false;
         last_kept = false;
+        chord_ok_ = false;
         continue;
       }
       full_gradient(&g_, &g_raw_);
@@ -542,6 +548,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     res.converged = false;
     res.residual = std::max(res.residual, floor);
   }
+  if (res.converged && res.iterations <= 1) chord_ok_ = true;  // calm again
   if (!finite_loads) {
     res.converged = false;
     res.residual = std::numeric_limits<double>::infinity();
