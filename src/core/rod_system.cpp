@@ -146,18 +146,28 @@ bool BlockTridiagSolver::factor(const BlockTridiag& a, double min_pivot) {
     s = a.diag[k];
     if (k > 0) s.noalias() -= l_lower_[k - 1] * l_lower_[k - 1].transpose();
     if (!cholesky6(s, min_pivot, &l, &inv)) return false;
-    // L^-1 by forward substitution on the identity: the solves then multiply by it (a product
-    // the compiler vectorises) instead of substituting element by element.
+    // L^-1 by forward substitution on the identity, a row at a time (the six columns of a row are
+    // independent, so the substitution does not wait on itself): the solves then multiply by it
+    // (a product the compiler vectorises) instead of substituting element by element.
     Mat6& li = l_inv_[k];
     li.setZero();
-    for (int c = 0; c < 6; ++c)
-      for (int j = c; j < 6; ++j) {
+    for (int j = 0; j < 6; ++j)
+      for (int c = 0; c < 6; ++c) {
         double v = j == c ? 1.0 : 0.0;
-        for (int m = c; m < j; ++m) v -= l(j, m) * li(m, c);
+        for (int m = 0; m < j; ++m) v -= l(j, m) * li(m, c);
         li(j, c) = v * inv(j);
       }
-    // C = A_{k+1,k} L^-T.
-    if (k + 1 < n) l_lower_[k].noalias() = a.lower[k] * li.transpose();
+    if (k + 1 < n) {
+      // C = A_{k+1,k} L^-T: each row c solves L c^T = a^T by forward substitution.
+      Mat6& c = l_lower_[k];
+      const Mat6& ak = a.lower[k];
+      for (int r = 0; r < 6; ++r)
+        for (int j = 0; j < 6; ++j) {
+          double v = ak(r, j);
+          for (int m = 0; m < j; ++m) v -= c(r, m) * l(j, m);
+          c(r, j) = v * inv(j);
+        }
+    }
   }
   blocks_ = n;
   return true;
