@@ -3,6 +3,16 @@
 namespace corde {
 
 void GraspCommandLog::keep(const Command& c) {
+  // An input of the same kind for the same grasp at the same world time replaces the earlier one
+  // (which then had no effect: a goal starts from the reference at its time, and a wrench or a
+  // twist rate is a setting). Paused, or stopped by the guard, the world time stands still while
+  // inputs keep arriving: the log stays at one input per grasp and kind instead of growing.
+  for (auto it = commands_.rbegin(); it != commands_.rend() && it->time == c.time; ++it)
+    if (it->kind == c.kind && it->name == c.name) {
+      *it = c;
+      next_ = commands_.size();
+      return;
+    }
   commands_.push_back(c);
   next_ = commands_.size();
 }

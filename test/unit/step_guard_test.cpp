@@ -446,5 +446,32 @@ TEST(StepGuard, RollbackKeepsTheInputsSinceTheSnapshot) {
   }
 }
 
+// Inputs at one world time (a paused node, or one stopped by the guard, fed a flood of poses)
+// keep one entry per grasp and kind: the log does not grow while the time stands still, and the
+// last input is the one that acts.
+TEST(StepGuard, CommandLogKeepsOneInputPerGraspAndTime) {
+  Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
+  World& w = s.world;
+  GraspSet grasps;
+  GraspCommandLog log;
+  const GraspSpec& spec = s.grasps.at(0);
+  int rod = 0, seg = 0;
+  ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
+  ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+  Eigen::Isometry3d goal = segment_pose(w.rods()[rod], seg);
+  for (int k = 0; k < 10000; ++k) {
+    goal.translation().x() = 0.4 + 1e-6 * k;
+    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
+    log.set_twist_rate(grasps, w, spec.name, 0.1 * k);
+  }
+  EXPECT_EQ(log.size(), 2u);
+  EXPECT_EQ(grasps.find(spec.name)->holder.goal().translation().x(), goal.translation().x());
+  EXPECT_EQ(grasps.find(spec.name)->twist_rate, 0.1 * 9999);
+  // At another time they accumulate, as the replay needs them.
+  w.set_time(w.time() + 1e-3);
+  log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
+  EXPECT_EQ(log.size(), 3u);
+}
+
 }  // namespace
 }  // namespace corde
