@@ -464,8 +464,8 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       break;
     }
     // A kept factorisation that did not cut the residual to a quarter is no longer worth
-    // keeping, and Newton iterations factorise afresh until a step needs none (the rod moves too
-    // much for chord iterations; the contact response may still keep one).
+    // keeping, and Newton iterations factorise afresh until a step converges in one or none (the
+    // rod moves too much for chord iterations; the contact response may still keep one).
     if (last_kept && res.residual > 0.25 * last_residual) {
       factored_ = have_factor_ = false;
       chord_ok_ = false;
