@@ -131,7 +131,8 @@ class ImplicitEuler {
   // Whether the kept factorisation may stand for the matrix at the rod's state now.
   bool factor_reusable(const Rod& rod);
   // The rod's parameters that enter the Newton matrix (section, drag, rest lengths, masses,
-  // inertia, rest strains), flattened, to tell a configured rod from the one factorised.
+  // inertia, rest strains, the clamps' ghost frames; the velocities under quadratic drag),
+  // flattened, to tell a configured rod from the one factorised.
   static void parameters(const Rod& rod, std::vector<double>* out);
   void solve_impulses(const std::vector<Vec3>& impulses);  // into z_
   bool history_usable(const Rod& rod, double h) const;

@@ -1,18 +1,38 @@
 #include "corde_sim/grasp_commands.h"
 
+#include <algorithm>
+#include <iterator>
+
 namespace corde {
 
 void GraspCommandLog::keep(const Command& c) {
   // An input of the same kind for the same grasp at the same world time replaces the earlier one
-  // (which then had no effect: a goal starts from the reference at its time, and a wrench or a
-  // twist rate is a setting). Paused, or stopped by the guard, the world time stands still while
-  // inputs keep arriving: the log stays at one input per grasp and kind instead of growing.
-  for (auto it = commands_.rbegin(); it != commands_.rend() && it->time == c.time; ++it)
-    if (it->kind == c.kind && it->name == c.name) {
-      *it = c;
-      next_ = commands_.size();
-      return;
+  // (which then had no effect: a goal of a nonzero duration starts from the reference at its
+  // time, which the next goal at that time starts from again; a wrench or a twist rate is a
+  // setting). A goal of zero duration moves the reference to itself at once, so a goal of
+  // nonzero duration after it starts from it: that pair is kept; a goal of zero duration replaces
+  // any earlier one (where it starts from does not matter). Paused, or stopped by the guard, the
+  // world time stands still while inputs keep arriving: the log keeps at most two goals per grasp
+  // and one input of each other kind instead of growing.
+  auto same = [&](const Command& k) { return k.kind == c.kind && k.name == c.name; };
+  if (c.kind == Command::Kind::kGoal && !(c.duration > 0.0)) {
+    // Every earlier goal at this time is superseded.
+    auto first = commands_.end();
+    while (first != commands_.begin() && std::prev(first)->time == c.time) --first;
+    commands_.erase(std::remove_if(first, commands_.end(), same), commands_.end());
+  } else {
+    for (auto it = commands_.rbegin(); it != commands_.rend() && it->time == c.time; ++it) {
+      if (!same(*it)) continue;
+      // The latest input of this kind for this grasp: replaced, unless it is a goal of zero
+      // duration that this one starts from.
+      if (c.kind != Command::Kind::kGoal || it->duration > 0.0) {
+        *it = c;
+        next_ = commands_.size();
+        return;
+      }
+      break;
     }
+  }
   commands_.push_back(c);
   next_ = commands_.size();
 }

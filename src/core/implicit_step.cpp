@@ -548,7 +548,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     res.converged = false;
     res.residual = std::max(res.residual, floor);
   }
-  if (res.converged && res.iterations <= 1) chord_ok_ = true;  // calm again
+  if (finite_loads && res.converged && res.iterations <= 1) chord_ok_ = true;  // calm again
   if (!finite_loads) {
     res.converged = false;
     res.residual = std::numeric_limits<double>::infinity();
@@ -618,6 +618,17 @@ void ImplicitEuler::parameters(const Rod& rod, std::vector<double>* out) {
   out->insert(out->end(), rod.rest_lengths().begin(), rod.rest_lengths().end());
   out->insert(out->end(), rod.node_masses().begin(), rod.node_masses().end());
   for (const Vec3& u : rod.rest_strains()) out->insert(out->end(), u.data(), u.data() + 3);
+  // The clamps' ghost frames and rest strains enter the bending blocks (a turning clamp changes
+  // them at every step).
+  for (const GhostFrame* g : {&rod.ghost_start(), &rod.ghost_end()})
+    if (g->active) {
+      out->insert(out->end(), g->frame.coeffs().data(), g->frame.coeffs().data() + 4);
+      out->insert(out->end(), g->uhat.data(), g->uhat.data() + 3);
+    }
+  // Quadratic drag's matrix grows with the speed at the step's start: any change of the
+  // velocities makes a new one.
+  if (d.quadratic_normal > 0.0 || d.quadratic_tangential > 0.0)
+    for (const Vec3& v : rod.velocities()) out->insert(out->end(), v.data(), v.data() + 3);
 }
 
 bool ImplicitEuler::factor_reusable(const Rod& rod) {

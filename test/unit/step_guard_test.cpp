@@ -467,10 +467,17 @@ TEST(StepGuard, CommandLogKeepsOneInputPerGraspAndTime) {
   EXPECT_EQ(log.size(), 2u);
   EXPECT_EQ(grasps.find(spec.name)->holder.goal().translation().x(), goal.translation().x());
   EXPECT_EQ(grasps.find(spec.name)->twist_rate, 0.1 * 9999);
+  // Goals of zero duration (equal stamps) replace each other too; one of nonzero duration after
+  // one of zero starts from it, so both stay (at most two goals at one time).
+  for (int k = 0; k < 1000; ++k) {
+    log.set_goal(grasps, spec.name, w.time(), goal, 0.0);
+    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
+  }
+  EXPECT_EQ(log.size(), 3u);
   // At another time they accumulate, as the replay needs them.
   w.set_time(w.time() + 1e-3);
   log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-  EXPECT_EQ(log.size(), 3u);
+  EXPECT_EQ(log.size(), 4u);
 }
 
 }  // namespace
