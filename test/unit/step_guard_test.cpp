@@ -354,6 +354,19 @@ TEST(StepGuard, ShippedScenesRunWithoutEvents) {
   }
 }
 
+// The node's rostest rope (test/ros/scenes/rope.yaml, one rod) with its scene grasp held by
+// `grasps` where the segment is, as the node takes it; returns the grasped segment.
+int grip(Scene* s, GraspSet* grasps) {
+  const GraspSpec& spec = s->grasps.at(0);
+  int rod = 0, seg = 0;
+  EXPECT_EQ(grasps->check(s->world, spec, &rod, &seg), "");
+  EXPECT_EQ(rod, 0);
+  EXPECT_EQ(grasps->add(s->world, spec, segment_pose(s->world.rods()[rod], seg), nullptr,
+                        s->world.time()),
+            "");
+  return seg;
+}
+
 // A grasp pulled 7.5 cm back towards the clamp over 0.1 s (the node's first pose input on its
 // rostest rope, at its default holder limits) does work on the rope that the window counts only
 // to first order (its reaction times the holder's speed at the end of each step): the rise
@@ -366,9 +379,7 @@ TEST(StepGuard, GraspPullIsWorkNotGrowth) {
     World& w = s.world;
     GraspSet grasps;
     const GraspSpec& spec = s.grasps.at(0);
-    int rod = 0, seg = 0;
-    ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
-    ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+    const int rod = 0, seg = grip(&s, &grasps);
     StepGuard guard;
     guard.reset(w);
     const StepGuard::StepFn fn = [&](World* world) {
@@ -399,9 +410,7 @@ TEST(StepGuard, RollbackKeepsTheInputsSinceTheSnapshot) {
     GraspSet grasps, saved;
     GraspCommandLog log;
     const GraspSpec& spec = s.grasps.at(0);
-    int rod = 0, seg = 0;
-    ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
-    ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+    const int rod = 0, seg = grip(&s, &grasps);
     StepGuard guard;
     guard.set_hooks(
         [&] {
@@ -455,9 +464,7 @@ TEST(StepGuard, CommandLogKeepsOneInputPerGraspAndTime) {
   GraspSet grasps;
   GraspCommandLog log;
   const GraspSpec& spec = s.grasps.at(0);
-  int rod = 0, seg = 0;
-  ASSERT_EQ(grasps.check(w, spec, &rod, &seg), "");
-  ASSERT_EQ(grasps.add(w, spec, segment_pose(w.rods()[rod], seg), nullptr, w.time()), "");
+  const int rod = 0, seg = grip(&s, &grasps);
   Eigen::Isometry3d goal = segment_pose(w.rods()[rod], seg);
   for (int k = 0; k < 10000; ++k) {
     goal.translation().x() = 0.4 + 1e-6 * k;
