@@ -68,6 +68,7 @@ struct ContactStats {
   double max_penetration = 0.0;  // largest -gap at detection (m, >= 0)
   int candidate_pairs = 0;       // segment pairs the broad phase passed to the narrow phase
   int iterations = 0;            // Gauss-Seidel sweeps done (they stop once converged)
+  int rounds = 0;                // implicit: rounds of sweeps and rod responses
 };
 
 // The contact stage of World::step: detection and the constraint solve. Holds the scratch and the

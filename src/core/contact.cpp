@@ -171,6 +171,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   };
   for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
     if (round > 0 && violation() <= cs.implicit_tolerance) break;
+    ++stats_.rounds;
     for (size_t k = 0; k < nc; ++k) old_[k] = {0, contacts_[k].pn, contacts_[k].pt};
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) held_v_[r] = velocity_[r];  // the true velocities
