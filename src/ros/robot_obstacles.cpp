@@ -62,7 +62,8 @@ void RobotObstacles::install(corde::ObstacleSet* set) {
 }
 
 bool RobotObstacles::set_link_pose(corde::ObstacleSet* set, int k, const Eigen::Isometry3d& pose,
-                                   double interval, double max_speed, double max_angular_speed) {
+                                   double interval, double max_speed, double max_angular_speed,
+                                   double max_lag) {
   Link& link = links_[k];
   bool within = true;
   for (int i : link.elements) {
@@ -74,7 +75,7 @@ bool RobotObstacles::set_link_pose(corde::ObstacleSet* set, int k, const Eigen::
       o.pose = target;
       e.index = set->add(o);
     } else {
-      within = e.glide.glide_to(target, interval, max_speed, max_angular_speed) && within;
+      within = e.glide.glide_to(target, interval, max_speed, max_angular_speed, max_lag) && within;
     }
   }
   link.seen = true;

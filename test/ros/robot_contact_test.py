@@ -50,12 +50,14 @@ class Mover:
         self.thread.start()
 
     def _run(self):
-        last = time.monotonic()
+        # Position and stamp from one clock reading: the node times the link's motion by the
+        # stamps, so a stamp taken apart from the position (this thread is often descheduled
+        # on a loaded machine) would make the bar's speed between messages jitter.
+        last = rospy.Time.now()
         while not self.stop and not rospy.is_shutdown():
-            now = time.monotonic()
-            self.x = min(END_X, self.x + self.speed * (now - last))
-            last = now
             stamp = rospy.Time.now()
+            self.x = min(END_X, self.x + self.speed * (stamp - last).to_sec())
+            last = stamp
             m = TFMessage()
             m.transforms = [
                 transform_msg("world", "pusher", (self.x, 0.0, HEIGHT), np.eye(3), stamp),
@@ -118,14 +120,18 @@ class RobotContact(unittest.TestCase):
         names = {(m.ns, m.action) for a in arrays for m in a.markers}
         self.assertIn(("contacts", 0), names)
         self.assertIn(("contact_forces", 0), names)
-        bar = [m for a in markers.messages(since=t1 - 0.1) for m in a.markers
+        # (Waited for: markers come at 20 Hz, and this thread may have been descheduled.)
+        is_bar = lambda a: any(m.ns == "obstacles" and m.action == 0 for m in a.markers)
+        bar = [m for a in markers.wait(1, since=t1 - 0.1, pred=is_bar) for m in a.markers
                if m.ns == "obstacles" and m.action == 0]
         self.assertTrue(bar, "no obstacle marker")
         self.assertAlmostEqual(bar[-1].pose.position.x, END_X, delta=0.005)
         self.assertAlmostEqual(bar[-1].pose.position.z, HEIGHT, delta=0.005)
 
-        # The ignored finger is no obstacle: 1 of 1 elements in tf.
-        values = [{v.key: v.value for v in st.values} for a in diags.messages(since=t0)
+        # The ignored finger is no obstacle: 1 of 1 elements in tf. Diagnostics come once a
+        # second, about as long as the push took: wait for one rather than hope one came.
+        is_sim = lambda a: any(st.name.endswith("simulation") for st in a.status)
+        values = [{v.key: v.value for v in st.values} for a in diags.wait(1, since=t0, pred=is_sim)
                   for st in a.status if st.name.endswith("simulation")]
         self.assertTrue(values, "no diagnostics")
         self.assertEqual(values[-1].get("robot collision elements (in tf / all)"), "1 / 1")

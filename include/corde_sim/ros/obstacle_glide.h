@@ -2,7 +2,8 @@
 // frame, 30 to 200 Hz): each new pose is reached at constant linear and angular velocity over
 // the interval it came after, so the contact solver sees a surface that moves a little every
 // step with the velocity it is given, instead of one that jumps centimetres between tf messages
-// (a jump would push the cable's nodes deep inside). The price is one tf interval of delay.
+// (a jump would push the cable's nodes deep inside). The price is one tf interval of delay (plus
+// the jitter with which poses are picked up, at most max_lag).
 // No ROS here.
 #pragma once
 
@@ -24,17 +25,23 @@ class ObstacleGlide {
     remaining_ = 0.0;
   }
 
-  // Glides from the current pose to `target` over `interval` seconds (simulation time), or longer
-  // if that would exceed `max_speed` (m/s) or `max_angular_speed` (rad/s). Returns false when
-  // the caps made it longer (the motion was faster than them: a jump in tf).
+  // Glides from the current pose to `target` (seconds of simulation time), reaching it
+  // `interval` after the end of the glide under way, or longer if that would exceed `max_speed`
+  // (m/s) or `max_angular_speed` (rad/s). Returns false when the caps made it longer (the motion
+  // was faster than them: a jump in tf). Timing the glide from the previous target's arrival,
+  // not from now, keeps a steady link steady when its poses are picked up early (tf arrives
+  // with jitter; restarting the interval from now moved a 1 m/s link at up to 2.4 m/s). At most
+  // `max_lag` of the glide under way is carried over: a simulation slower than the poses speeds
+  // the link up instead of falling ever further behind.
   bool glide_to(const Eigen::Isometry3d& target, double interval, double max_speed,
-                double max_angular_speed) {
+                double max_angular_speed, double max_lag) {
+    const double carried = std::clamp(remaining_, 0.0, std::max(max_lag, 0.0));
     target_ = target;
     const Vec3 d = target.translation() - pose_.translation();
     const Eigen::AngleAxisd turn(Eigen::Matrix3d(target.linear() * pose_.linear().transpose()));
     const double angle = std::abs(turn.angle());
     const double needed = std::max(d.norm() / max_speed, angle / max_angular_speed);
-    const double duration = std::max(interval, needed);
+    const double duration = std::max(carried + interval, needed);
     if (!(duration > 0.0)) {
       reset(target);  // no motion at all
       return true;
@@ -42,7 +49,7 @@ class ObstacleGlide {
     remaining_ = duration;
     v_ = d / duration;
     w_ = (turn.angle() / duration) * turn.axis();
-    return needed <= interval * (1.0 + 1e-9);
+    return needed <= (carried + interval) * (1.0 + 1e-9);
   }
 
   // The pose at the start of the next step and the mean velocity over it (world frame; angular

@@ -38,10 +38,11 @@ class RobotObstacles {
   void install(corde::ObstacleSet* set);
 
   // Link k is at `pose` (world frame). The first pose adds its elements to `set` there; later
-  // ones glide them over `interval` (s of simulation time, see ObstacleGlide). Returns false if
-  // the speed caps slowed the glide down.
+  // ones glide them over `interval` after the glide under way (s of simulation time, at most
+  // `max_lag` carried over; see ObstacleGlide). Returns false if the speed caps slowed the glide
+  // down.
   bool set_link_pose(corde::ObstacleSet* set, int k, const Eigen::Isometry3d& pose, double interval,
-                     double max_speed, double max_angular_speed);
+                     double max_speed, double max_angular_speed, double max_lag);
 
   // Before each world step of h seconds: moving elements get their pose and velocity for the
   // step. Allocates nothing.
