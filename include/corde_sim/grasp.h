@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -23,6 +24,14 @@ struct GraspSpec {
   // Keyframed motion of the holder from where it takes hold (its pose then: segment_pose()), about
   // the holder's origin; null: the holder stays (corde_run) or follows its inputs (the node).
   std::shared_ptr<const Motion> motion;
+  // When the grasp holds (scene keys grasp_time and release_time): it takes hold at grasp_time,
+  // its holder at the segment's pose then, and lets go at release_time (the segment is free from
+  // then on and keeps its velocity). `motion` runs in the time since grasp_time.
+  double grasp_time = 0.0;         // s
+  double release_time = INFINITY;  // s; INFINITY: never
+  // The holder pose `motion` was read relative to (the segment as created): holder_motion()
+  // rebases it on where a late grasp takes hold.
+  Eigen::Isometry3d motion_reference = Eigen::Isometry3d::Identity();
 };
 
 struct Grasp {
@@ -37,6 +46,18 @@ struct Grasp {
 // the segment whose midpoint (along the rest lengths) is nearest to s. Throws
 // std::out_of_range for a negative node index or a non-finite arc length.
 int grasp_segment(const Rod& rod, const GraspSpec& spec);
+
+// Whether the grasp holds during the step from t to t + h: from the step that starts nearest
+// grasp_time up to the one that starts nearest release_time (within half a step, so that round-off
+// in t and the halved steps of the stability guard's replays take hold and let go as the first run
+// did). With h = 0: whether it holds at the instant t (statics).
+bool grasp_holds(const GraspSpec& spec, double t, double h);
+
+// The holder's keyframed motion for a grasp whose holder takes hold at `start` (null without
+// keyframes): spec.motion when it holds from t = 0; for a later grasp the same keyframes with the
+// world positions and orientations kept and the displacements and turns relative to `start` (turns
+// about the tangent then). Its time is the time since grasp_time.
+std::shared_ptr<const Motion> holder_motion(const GraspSpec& spec, const Eigen::Isometry3d& start);
 
 // Pose of a segment: translation at its midpoint, rotation with the directors as columns.
 Eigen::Isometry3d segment_pose(const Rod& rod, int segment);

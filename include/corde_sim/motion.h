@@ -27,6 +27,9 @@ struct Keyframe {
   Vec3 displacement = Vec3::Zero();  // m, from the start position
   Quat rotation = Quat::Identity();  // from the start orientation, world frame
   double angle = 0.0;                // rad about Motion::turn_axis (2 pi per turn)
+  // Whether the keyframe gave a world position / orientation (scene keys `position`,
+  // `orientation`) rather than one relative to the start: rebased() keeps those where they are.
+  bool absolute_position = false, absolute_orientation = false;
 };
 
 class Motion {
@@ -51,6 +54,11 @@ class Motion {
                      const Vec3& turn_axis, Interpolation interpolation = Interpolation::kStop);
 
   Sample at(double t) const;
+  // The same motion for an item that starts at `to` instead of `from` (a grasp that takes hold
+  // where the rod is then): keyframes given as world positions or orientations stay there, the
+  // relative ones (displacements, turns) now start from `to`; turns about `turn_axis`.
+  Motion rebased(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
+                 const Vec3& turn_axis) const;
   // The pose at t of a frame that was at `start` at time 0, moved about its own origin (a grasp's
   // holder).
   Eigen::Isometry3d pose_at(double t, const Eigen::Isometry3d& start) const;

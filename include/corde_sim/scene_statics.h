@@ -38,15 +38,18 @@ struct SceneEquilibrium {
 // "" when statics can solve the rod (all rods for an empty name), else what it cannot handle and
 // why, naming the rod and item: follower loads (no potential), line/plane/axis constraints,
 // obstacle, rod-rod or self contacts (statics solves no contacts), a rod held nowhere under
-// gravity or loads (no equilibrium).
-std::string statics_unsupported(const Scene& scene, const std::string& rod = "");
+// gravity or loads at time t (no equilibrium; a grasp holds at t from its grasp_time to before its
+// release_time).
+std::string statics_unsupported(const Scene& scene, const std::string& rod = "", double t = 0.0);
 
-// Solves every rod's equilibrium at time t: drives at their state at t, grasps held where their
-// keyframes put them at t (or where they take hold), loads that have started by t at their full
-// value (ramps completed: a ramp only keeps a dynamic run from ringing). From the rods' current
-// state, with continuation: a failed solve is retried from that state with 4x the load
-// steps (up to 4 attempts). Sets the world's time to t, zeroes the velocities and records each
-// support's static reaction (reactions.h). Throws SceneError when statics_unsupported().
+// Solves every rod's equilibrium at time t: drives at their state at t, the grasps that hold at t
+// where their keyframes put them then (or where they take hold; a late grasp's holder starts at
+// the segment's pose as given, statics does not follow the motion before it), loads that have
+// started by t at their full value (ramps completed: a ramp only keeps a dynamic run from ringing).
+// From the rods' current state, with continuation: a failed solve is retried from that state with
+// 4x the load steps (up to 4 attempts). Sets the world's time to t, zeroes the velocities and
+// records each support's static reaction (reactions.h). Throws SceneError when
+// statics_unsupported().
 SceneEquilibrium solve_scene_statics(Scene* scene, double t, const StaticOptions& options = {});
 
 // `initial_state: equilibrium`: puts the rod at its equilibrium at time 0, at rest, with the

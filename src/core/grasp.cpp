@@ -39,6 +39,16 @@ int grasp_segment(const Rod& rod, const GraspSpec& spec) {
   return last;
 }
 
+bool grasp_holds(const GraspSpec& spec, double t, double h) {
+  return t >= spec.grasp_time - 0.5 * h && t < spec.release_time - 0.5 * h;
+}
+
+std::shared_ptr<const Motion> holder_motion(const GraspSpec& spec, const Eigen::Isometry3d& start) {
+  if (!spec.motion || spec.grasp_time <= 0.0) return spec.motion;
+  return std::make_shared<Motion>(
+      spec.motion->rebased(spec.motion_reference, start, start.linear().col(2)));
+}
+
 Eigen::Isometry3d segment_pose(const Rod& rod, int segment) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() = rod.orientations()[segment].normalized().toRotationMatrix();

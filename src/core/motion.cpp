@@ -83,8 +83,9 @@ Motion Motion::ramp(double start, double duration, const Vec3& displacement, dou
   if (!(std::isfinite(duration) && duration > 0.0))
     throw std::invalid_argument("ramp_time must be finite and > 0");
   std::vector<Keyframe> frames;
-  if (start > 0.0) frames.push_back(Keyframe{start, Vec3::Zero(), Quat::Identity(), 0.0});
-  frames.push_back(Keyframe{start + duration, displacement, Quat::Identity(), angle});
+  if (start > 0.0)
+    frames.push_back(Keyframe{start, Vec3::Zero(), Quat::Identity(), 0.0, false, false});
+  frames.push_back(Keyframe{start + duration, displacement, Quat::Identity(), angle, false, false});
   return Motion(std::move(frames), interpolation, turn_axis);
 }
 
@@ -131,6 +132,20 @@ Motion::Sample Motion::at(double t) const {
   s.angular_velocity =
       a.rotation * (arc.axis() * (arc.angle() * profile_rate)) + partial * (axis_ * angle_rate);
   return s;
+}
+
+Motion Motion::rebased(const Eigen::Isometry3d& from, const Eigen::Isometry3d& to,
+                       const Vec3& turn_axis) const {
+  std::vector<Keyframe> frames = frames_;
+  const Vec3 shift = from.translation() - to.translation();
+  const Quat turn = Quat(from.linear()) * Quat(to.linear()).conjugate();
+  for (Keyframe& f : frames) {
+    // displacement = position - from, rotation = orientation * from^-1: the same world pose from
+    // `to`.
+    if (f.absolute_position) f.displacement += shift;
+    if (f.absolute_orientation) f.rotation = (f.rotation * turn).normalized();
+  }
+  return Motion(std::move(frames), how_, turn_axis);
 }
 
 Eigen::Isometry3d Motion::pose_at(double t, const Eigen::Isometry3d& start) const {

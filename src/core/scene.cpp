@@ -423,12 +423,21 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
     }
   }
   if (auto p = m.find("hold_orientation")) g.hold_orientation = p->boolean();
+  if (auto p = m.find("grasp_time")) g.grasp_time = p->non_negative();
+  if (auto p = m.find("release_time")) {
+    g.release_time = p->non_negative();
+    if (!(g.release_time > g.grasp_time))
+      p->fail(num(g.release_time) + " s is not after grasp_time " + num(g.grasp_time) +
+              " s: a grasp lets go after it takes hold");
+  }
   {
     const int seg = grasp_segment(rod, g);
     MotionStart start;
     start.position = 0.5 * (rod.positions()[seg] + rod.positions()[seg + 1]);
     start.orientation = rod.orientations()[seg];
     start.tangent = director3(start.orientation);
+    start.time = g.grasp_time;
+    g.motion_reference = segment_pose(rod, seg);
     g.motion = read_motion(&m, start, base);
   }
   m.finish();
@@ -598,6 +607,12 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps")) {
       scene.grasps.push_back(read_grasp(item, scene, &entries, &names, base));
       const GraspSpec& spec = scene.grasps.back();
+      if (spec.motion && spec.grasp_time + spec.motion->end_time() > spec.release_time)
+        scene.warnings.push_back(
+            item.path() + ".release_time: the grasp lets go at " + num(spec.release_time) +
+            " s, before its last keyframe at " + num(spec.grasp_time + spec.motion->end_time()) +
+            " s: the segment leaves with the holder's velocity then, the later keyframes move "
+            "nothing");
       const int seg = grasp_segment(scene.world.rod(spec.rod), spec);
       Support support;
       support.name = spec.name;

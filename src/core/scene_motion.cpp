@@ -23,20 +23,36 @@ Motion::Interpolation read_interpolation(Map* m, Motion::Interpolation fallback)
                        : Motion::Interpolation::kLinear;
 }
 
+// Why a keyframe at time t cannot be: it does not come after the motion's start (a late grasp).
+std::string not_after(double t, const MotionStart& start) {
+  return num(t) + " s is not after " + start.time_key + " " + num(start.time) +
+         " s: the keyframes act from when the grasp takes hold (from where the rod is then)";
+}
+
 // The keyframe's pose relative to the start; a channel a keyframe leaves out keeps its value
 // from the keyframe before.
 Keyframe read_keyframe(const Value& v, const MotionStart& start, const Keyframe& previous) {
   Map m(v);
   Keyframe k = previous;
-  k.time = m.get("time").non_negative();
+  const Value time = m.get("time");
+  k.time = time.non_negative();
+  if (start.time > 0.0 && !(k.time > start.time)) time.fail(not_after(k.time, start));
   if (start.translates) {
     if (m.has("position") && m.has("displacement")) m.fail("give either position or displacement");
-    if (auto p = m.find("position")) k.displacement = p->vec3() - start.position;
-    if (auto p = m.find("displacement")) k.displacement = p->vec3();
+    if (auto p = m.find("position")) {
+      k.displacement = p->vec3() - start.position;
+      k.absolute_position = true;
+    }
+    if (auto p = m.find("displacement")) {
+      k.displacement = p->vec3();
+      k.absolute_position = false;
+    }
   }
   if (start.rotates) {
-    if (auto p = m.find("orientation"))
+    if (auto p = m.find("orientation")) {
       k.rotation = p->quaternion() * start.orientation.conjugate();
+      k.absolute_orientation = true;
+    }
     if (auto p = m.find("turns")) k.angle = 2.0 * M_PI * p->number();
   }
   m.finish();
@@ -118,12 +134,15 @@ std::vector<Keyframe> read_keyframe_file(const Value& v, const MotionStart& star
     if ((has_abs || has_rel) && !start.translates) fail("this item cannot be moved, only turned");
     if ((has_q || k.angle != previous.angle) && !start.rotates)
       fail("this item cannot be turned, only moved");
+    if (start.time > 0.0 && !(k.time > start.time)) fail("time " + not_after(k.time, start));
     if (has_abs) k.displacement = abs - start.position;
     if (has_rel) k.displacement = rel;
+    if (has_abs || has_rel) k.absolute_position = has_abs;
     if (has_q) {
       const Quat qq(q[3], q[0], q[1], q[2]);
       if (std::abs(qq.norm() - 1.0) > 1e-6) fail("the quaternion is not of unit norm");
       k.rotation = qq.normalized() * start.orientation.conjugate();
+      k.absolute_orientation = true;
     }
     frames.push_back(k);
     previous = k;
@@ -163,6 +182,7 @@ std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
         previous = frames.back();
       }
     }
+    for (Keyframe& f : frames) f.time -= start.time;  // the time since the motion's start
     try {
       return std::make_shared<Motion>(std::move(frames), how, start.tangent);
     } catch (const std::invalid_argument& e) {
@@ -186,9 +206,15 @@ std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
   if (!m->has("ramp_time"))
     throw SceneError(where + ".ramp_time: missing (required with move_by or turns)");
   const double ramp = m->get("ramp_time").positive();
-  double t0 = 0.0;
-  if (auto p = m->find("start_time")) t0 = p->non_negative();
-  return std::make_shared<Motion>(Motion::ramp(t0, ramp, d, angle, start.tangent, how));
+  double t0 = start.time;
+  if (auto p = m->find("start_time")) {
+    t0 = p->non_negative();
+    if (t0 < start.time)
+      p->fail(num(t0) + " s is before " + start.time_key + " " + num(start.time) +
+              " s: the move starts when the grasp takes hold at the earliest");
+  }
+  return std::make_shared<Motion>(
+      Motion::ramp(t0 - start.time, ramp, d, angle, start.tangent, how));
 }
 
 void read_initial(const Value& v, Rod* rod) {

@@ -99,6 +99,10 @@ struct MotionStart {
   Quat orientation = Quat::Identity();
   Vec3 tangent = Vec3::UnitZ();  // the axis of `turns`
   bool translates = true, rotates = true;
+  // When the motion starts (a grasp's grasp_time, named `time_key` in messages): keyframes must
+  // come after it and start_time may not precede it; the motion read runs in the time since.
+  double time = 0.0;
+  const char* time_key = "grasp_time";
 };
 // Whether the entry has any of the keys of a keyframed drive (keyframes, move_by, turns,
 // ramp_time, interpolation).

@@ -131,25 +131,43 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   r.every = options.every > 0
                 ? options.every
                 : static_cast<int>(std::clamp(std::round(0.01 / h), 1.0, 1e9));  // fits an int
-  // Grasps hold their segments where they are or move them along their keyframes (the ROS node
-  // moves them from its inputs instead).
+  // Grasps hold their segments where they take hold or move them along their keyframes (the ROS
+  // node moves them from its inputs instead); a grasp with grasp_time or release_time takes hold
+  // and lets go in the step nearest those times.
   struct Held {
-    Rod* rod;
+    int rod;
+    const GraspSpec* spec;
     Grasp grasp;
     Eigen::Isometry3d start;
-    const Motion* motion;
+    std::shared_ptr<const Motion> motion;
+    bool holding;
   };
   std::vector<Held> held;
+  auto take_hold = [&](World* w, Held* g) {
+    Rod& rod = w->rods()[g->rod];
+    g->start = segment_pose(rod, grasp_segment(rod, *g->spec));
+    g->grasp = make_grasp(rod, *g->spec, g->start);
+    g->motion = holder_motion(*g->spec, g->start);
+    g->holding = true;
+    hold(rod, g->grasp, g->start);
+  };
   for (const GraspSpec& spec : scene->grasps) {
-    Rod& rod = world.rod(spec.rod);
-    const Eigen::Isometry3d holder = segment_pose(rod, grasp_segment(rod, spec));
-    held.push_back({&rod, make_grasp(rod, spec, holder), holder, spec.motion.get()});
-    hold(rod, held.back().grasp, holder);
+    int r = 0;
+    while (world.rods()[r].name() != spec.rod) ++r;
+    held.push_back({r, &spec, Grasp(), Eigen::Isometry3d::Identity(), nullptr, false});
+    if (grasp_holds(spec, world.time(), 0.0)) take_hold(&world, &held.back());
   }
-  auto move_holders = [&](double t) {
-    for (const Held& g : held) {
-      if (!g.motion) continue;
-      hold(*g.rod, g.grasp, g.motion->pose_at(t, g.start));
+  auto move_holders = [&](World* w) {
+    const double t = w->time(), h = w->time_step;
+    for (Held& g : held) {
+      const bool holds = grasp_holds(*g.spec, t, h);
+      if (holds && !g.holding) take_hold(w, &g);
+      if (!holds && g.holding) {
+        release(w->rods()[g.rod], g.grasp);  // the segment keeps the velocity of the last step
+        g.holding = false;
+      }
+      if (g.holding && g.motion)
+        hold(w->rods()[g.rod], g.grasp, g.motion->pose_at(t + h - g.spec->grasp_time, g.start));
     }
   };
   const bool any_output = options.csv || options.reactions || options.energies;
@@ -174,10 +192,14 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   if (options.reactions) write_reaction_header(*options.reactions);
   if (any_output && r.ok) write(false);
   StepGuard guard(options.guard);
+  // Which grasps hold goes back with the world at a rollback (their drives are in the world), so
+  // that a replay takes hold and lets go again at the scripted times.
+  std::vector<Held> saved = held;
+  guard.set_hooks([&] { saved = held; }, [&] { held = saved; });
   guard.reset(world);
   const double t_start = world.time();
   const StepGuard::StepFn step_fn = [&](World* w) {
-    move_holders(w->time() + w->time_step);
+    move_holders(w);
     w->step();
   };
   long events_seen = 0;

@@ -30,14 +30,16 @@ double angle_between(const Quat& a, const Quat& b) {
   return 2.0 * std::acos(std::min(1.0, std::abs(a.coeffs().dot(b.coeffs()))));
 }
 
-// Holds the rod's grasps as run_scene does: where they take hold, or where their keyframes have
-// moved the holder at t.
+// Holds the rod's grasps that hold at t as run_scene does: where they take hold, or where their
+// keyframes have moved the holder by t. Statics does not follow the rod's motion before a late
+// grasp takes hold: its holder starts at the segment's pose in the scene as given.
 void hold_grasps(const Scene& scene, Rod* rod, double t) {
   for (const GraspSpec& spec : scene.grasps) {
-    if (spec.rod != rod->name()) continue;
+    if (spec.rod != rod->name() || !grasp_holds(spec, t, 0.0)) continue;
     const Eigen::Isometry3d start = segment_pose(*rod, grasp_segment(*rod, spec));
     const Grasp g = make_grasp(*rod, spec, start);
-    hold(*rod, g, spec.motion ? spec.motion->pose_at(t, start) : start);
+    const std::shared_ptr<const Motion> motion = holder_motion(spec, start);
+    hold(*rod, g, motion ? motion->pose_at(t - spec.grasp_time, start) : start);
   }
 }
 
@@ -162,14 +164,14 @@ std::string not_converged(const RodEquilibrium& e, double t) {
          "beyond buckling, or held too loosely), try a dynamic run";
 }
 
-bool held(const Scene& scene, const Rod& rod) {
+bool held(const Scene& scene, const Rod& rod, double t) {
   if (!rod.node_drives().empty()) return true;
   for (const GraspSpec& g : scene.grasps)
-    if (g.rod == rod.name()) return true;
+    if (g.rod == rod.name() && grasp_holds(g, t, 0.0)) return true;
   return false;
 }
 
-std::string rod_unsupported(const Scene& scene, const Rod& rod) {
+std::string rod_unsupported(const Scene& scene, const Rod& rod, double t) {
   const std::string who = "rod '" + rod.name() + "'";
   const std::string no_contacts =
       "; statics solves no contacts (its equilibrium would pass through them): ";
@@ -208,29 +210,29 @@ std::string rod_unsupported(const Scene& scene, const Rod& rod) {
   }
   bool loaded = scene.world.gravity.norm() > 0.0;
   for (const Load& l : rod.loads()) loaded = loaded || l.value.norm() > 0.0;
-  if (loaded && !held(scene, rod))
-    return who +
-           " is held nowhere (no clamp, fixed or driven node, or grasp): under gravity and its "
+  if (loaded && !held(scene, rod, t))
+    return who + " is held nowhere at t = " + g_fmt(t) +
+           " s (no clamp, fixed or driven node, or grasp holding then): under gravity and its "
            "loads it has no equilibrium, it falls";
   return "";
 }
 
 }  // namespace
 
-std::string statics_unsupported(const Scene& scene, const std::string& rod) {
+std::string statics_unsupported(const Scene& scene, const std::string& rod, double t) {
   for (const Rod& r : scene.world.rods()) {
     if (!rod.empty() && r.name() != rod) continue;
-    const std::string why = rod_unsupported(scene, r);
+    const std::string why = rod_unsupported(scene, r, t);
     if (!why.empty()) return why;
   }
   return "";
 }
 
 SceneEquilibrium solve_scene_statics(Scene* scene, double t, const StaticOptions& options) {
-  const std::string why = statics_unsupported(*scene);
-  if (!why.empty()) throw SceneError("statics: " + why);
   if (!(t >= 0.0) || !std::isfinite(t))
     throw SceneError("statics: the time must be finite and >= 0, got " + g_fmt(t));
+  const std::string why = statics_unsupported(*scene, "", t);
+  if (!why.empty()) throw SceneError("statics: " + why);
   const auto start = std::chrono::steady_clock::now();
   SceneEquilibrium eq;
   eq.time = t;
@@ -249,7 +251,7 @@ SceneEquilibrium solve_scene_statics(Scene* scene, double t, const StaticOptions
 }
 
 RodEquilibrium settle_rod(Scene* scene, Rod* rod) {
-  const std::string why = rod_unsupported(*scene, *rod);
+  const std::string why = rod_unsupported(*scene, *rod, 0.0);
   if (!why.empty()) throw SceneError(why);
   const Rod given = *rod;
   hold_grasps(*scene, rod, 0.0);

@@ -164,7 +164,7 @@ void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &
 void SimNode::step_once(corde::World* world) {
   const double h = world->time_step;  // the guard's, while it runs a halved step
   if (grasp_commands_.pending() > 0) grasp_commands_.replay(grasps_, *world, world->time(), h);
-  if (!scripted_.empty()) drive_scripted(world->time(), h);
+  if (!scripted_.empty()) drive_scripted(world, world->time(), h);
   if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h);
   if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);
   world->step();
@@ -179,14 +179,15 @@ long SimNode::run_steps(long n, double deadline) {
   const double c0 = thread_cpu_seconds();
   long k = 0;
   scripted_.clear();  // keeps its capacity
-  for (const auto& kv : wiring_)
-    if (kv.second.script) scripted_.emplace_back(&kv.first, &kv.second);
+  for (auto& kv : wiring_)
+    if (kv.second.scripted) scripted_.emplace_back(&kv.first, &kv.second);
   for (; k < n && !guard_.failed(); ++k) {
     if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
     if (!guard_.step(&world_, 1, step_fn_)) break;
   }
   const double dt = wall_seconds() - t0;
   step_cpu_total_ += thread_cpu_seconds() - c0;
+  refresh_if_grasps_changed();
   steps_total_ += k;
   steps_since_stats_ += k;
   step_wall_since_stats_ += dt;
@@ -217,6 +218,13 @@ void SimNode::advance(double now) {
     run_steps(std::numeric_limits<long>::max(), std::max(slice_end, now));
   }
   if (settle_guard()) check_holders_and_strain();
+  refresh_if_grasps_changed();  // (the guard may have replayed a scripted grasp or release)
+}
+
+void SimNode::refresh_if_grasps_changed() {
+  if (!layout_changed_) return;
+  layout_changed_ = false;
+  refresh_layout();  // the grasp frames and markers follow the held grasps
 }
 
 bool SimNode::settle_guard() {

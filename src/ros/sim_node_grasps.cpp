@@ -87,7 +87,10 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
   for (auto it = wiring_.begin(); it != wiring_.end();) {
     const bool kept = std::any_of(scene.grasps.begin(), scene.grasps.end(),
                                   [&](const corde::GraspSpec& g) { return g.name == it->first; });
-    if (kept) it->second.script.reset();  // add_grasp starts it again from the new scene
+    if (kept) {  // add_grasp starts its script again from the new scene
+      it->second.scripted = false;
+      it->second.script.reset();
+    }
     it = kept ? std::next(it) : wiring_.erase(it);
   }
   inputs_.clear();
@@ -166,22 +169,34 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   w.offset = param.offset;
   w.snap = param.snap;
   w.last_input_time = -1.0;
+  w.scripted = false;
   w.script.reset();
-  if (from_scene && spec.motion) {
+  const bool timed = spec.grasp_time > 0.0 || std::isfinite(spec.release_time);
+  if (from_scene && (spec.motion || timed)) {
     if (source == GraspSource::kTf && attached) {
       // Its frame is there already: an input, which wins over the keyframes.
       ROS_INFO(
-          "corde_sim: grasp '%s' follows tf frame '%s' from the start: its scene keyframes are "
-          "not used",
+          "corde_sim: grasp '%s' follows tf frame '%s' from the start: its scene keyframes, "
+          "grasp_time and release_time are not used",
           spec.name.c_str(), frame.c_str());
     } else {
-      w.script = spec.motion;
-      w.script_start = segment_start;
-      w.script_offset_inv = grasps_.find(spec.name)->grasp.offset.inverse();
+      w.scripted = true;
+      w.script_spec = spec;
+      if (corde::grasp_holds(spec, world_.time(), 0.0)) {
+        w.script = corde::holder_motion(spec, segment_start);
+        w.script_start = segment_start;
+        w.script_offset_inv = grasps_.find(spec.name)->grasp.offset.inverse();
+      } else {
+        grasps_.release(world_, spec.name);  // it takes hold at grasp_time
+      }
+      char until[64] = "";
+      if (std::isfinite(spec.release_time))
+        std::snprintf(until, sizeof until, ", lets go at t = %g s", spec.release_time);
       ROS_INFO(
-          "corde_sim: grasp '%s' follows its scene keyframes (to t = %g s, then holds the last) "
-          "until an input for it arrives",
-          spec.name.c_str(), spec.motion->end_time());
+          "corde_sim: grasp '%s' follows its scene script (takes hold at t = %g s, keyframes to "
+          "t = %g s, then holds the last%s) until an input for it arrives",
+          spec.name.c_str(), spec.grasp_time,
+          spec.grasp_time + (spec.motion ? spec.motion->end_time() : 0.0), until);
     }
   }
   wire_grasp(spec.name, &w);
@@ -189,23 +204,51 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   return "";
 }
 
-void SimNode::drive_scripted(double t, double h) {
+void SimNode::drive_scripted(corde::World* world, double t, double h) {
   for (const auto& s : scripted_) {
-    const GraspWiring& w = *s.second;
+    GraspWiring& w = *s.second;
+    const corde::GraspSpec& spec = w.script_spec;
+    const corde::GraspState* g = grasps_.find(*s.first);
+    if (!g) continue;
+    const bool holds = corde::grasp_holds(spec, t, h);
+    if (!holds) {
+      // Before grasp_time, or let go at release_time: the segment keeps its velocity.
+      if (g->held && grasps_.release(*world, *s.first)) layout_changed_ = true;
+      continue;
+    }
+    if (!g->held) {
+      // Takes hold where the segment is now (nothing jumps); the keyframes start from there.
+      int rod = -1, seg = -1;
+      const std::string error = grasps_.check(*world, spec, &rod, &seg);
+      if (!error.empty()) {
+        ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' cannot take hold at t = %g s: %s",
+                          s.first->c_str(), t, error.c_str());
+        continue;
+      }
+      const Eigen::Isometry3d start = corde::segment_pose(world->rods()[rod], seg);
+      grasps_.attach(*world, *s.first, start, nullptr, t);
+      w.script = corde::holder_motion(spec, start);
+      w.script_start = start;
+      w.script_offset_inv = Eigen::Isometry3d::Identity();  // the holder is the segment's pose
+      layout_changed_ = true;
+    }
     // Past the last keyframe the goal stays where the last call put it: the holder settles there
     // and costs nothing more.
-    if (t >= w.script->end_time()) continue;
-    const Eigen::Isometry3d pose = w.script->pose_at(t + h, w.script_start);
+    if (!w.script || t - spec.grasp_time >= w.script->end_time()) continue;
+    const Eigen::Isometry3d pose = w.script->pose_at(t + h - spec.grasp_time, w.script_start);
     grasps_.set_goal(*s.first, t, pose * w.script_offset_inv, h);
   }
 }
 
 void SimNode::end_script(const std::string& name, const char* what) {
   auto w = wiring_.find(name);
-  if (w == wiring_.end() || !w->second.script) return;
+  if (w == wiring_.end() || !w->second.scripted) return;
+  w->second.scripted = false;
   w->second.script.reset();
-  ROS_INFO("corde_sim: grasp '%s' %s: its scene keyframes no longer move it (t = %.3f s)",
-           name.c_str(), what, sim_time());
+  ROS_INFO(
+      "corde_sim: grasp '%s' %s: its scene keyframes (and grasp or release time) no longer drive "
+      "it (t = %.3f s)",
+      name.c_str(), what, sim_time());
 }
 
 void SimNode::wire_grasp(const std::string& name, GraspWiring* w) {
@@ -389,7 +432,8 @@ void SimNode::update_tf_holders() {
                         w.frame.c_str(), error.c_str());
       continue;
     }
-    if (w.script) end_script(kv.first, ("follows tf frame '" + w.frame + "' from now on").c_str());
+    if (w.scripted)
+      end_script(kv.first, ("follows tf frame '" + w.frame + "' from now on").c_str());
     if (!w.attached) {
       grasps_.attach(world_, kv.first, f, w.snap ? &w.offset : nullptr, world_.time());
       guard_.mark_good(world_);  // a rollback goes back to the attached grasp, not to before it
@@ -501,7 +545,7 @@ void SimNode::apply_inputs() {
         const double interval =
             last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
         last = e.input_time;
-        if (w->second.script) end_script(e.grasp, "follows its pose input from now on");
+        if (w->second.scripted) end_script(e.grasp, "follows its pose input from now on");
         grasp_commands_.set_goal(grasps_, e.grasp, world_.time(), e.pose, interval);
         break;
       }

@@ -248,6 +248,15 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
 
 bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   const corde::GraspState* g = grasps_.find(req.name);
+  auto w = wiring_.find(req.name);
+  if (g && !g->held && w != wiring_.end() && w->second.scripted) {
+    // A scene grasp waiting for its grasp_time: it will not take hold.
+    end_script(req.name, "was released (~release) before its grasp_time");
+    res.success = true;
+    res.message = "grasp '" + req.name + "' will not take hold (its scene script ended)";
+    ROS_INFO("corde_sim: %s", res.message.c_str());
+    return true;
+  }
   if (!g || !g->held) {
     res.success = false;
     res.message =
@@ -273,10 +282,11 @@ bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
     res.rods.push_back(g.grasp.rod);
     res.segments.push_back(g.grasp.segment);
     res.arc_lengths.push_back(g.arc_length);
-    // "scripted" while the scene's keyframes move the holder (until an input for the grasp).
-    res.sources.push_back(w == wiring_.end() ? ""
-                          : w->second.script ? "scripted"
-                                             : to_string(w->second.source));
+    // "scripted" while the scene's script (keyframes, grasp and release times) runs the grasp
+    // (until an input for it).
+    res.sources.push_back(w == wiring_.end()   ? ""
+                          : w->second.scripted ? "scripted"
+                                               : to_string(w->second.source));
     res.frames.push_back(w == wiring_.end() ? "" : w->second.frame);
     res.held.push_back(g.held);
     const Eigen::Isometry3d h = g.holder_pose();

@@ -9,7 +9,7 @@ namespace corde {
 namespace {
 
 Keyframe frame(double t, const Vec3& d, double turns = 0.0, const Quat& r = Quat::Identity()) {
-  return Keyframe{t, d, r, 2.0 * M_PI * turns};
+  return Keyframe{t, d, r, 2.0 * M_PI * turns, false, false};
 }
 
 Motion waypoints(Motion::Interpolation how) {

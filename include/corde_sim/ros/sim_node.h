@@ -58,11 +58,15 @@ struct GraspWiring {
   bool snap = false;
   int marker_id = 0;
   double last_input_time = -1.0;  // ROS time of the last pose input (s), for its interval
-  // A scene grasp with keyframes (GraspSpec::motion) is "scripted": its holder follows them in
-  // world time (World::time()) until the grasp's first input (a pose, its tf frame, ~release);
-  // null otherwise. The keyframes move the held segment's pose from `script_start` (its pose
-  // when the grasp was made), as corde_run does; the holder is that pose times
-  // `script_offset_inv` (the inverse of the grasp's offset then).
+  // A scene grasp with keyframes (GraspSpec::motion), grasp_time or release_time is "scripted":
+  // it takes hold and lets go at those times and its holder follows the keyframes, in world time
+  // (World::time()), until the grasp's first input (a pose, its tf frame, ~grasp, ~release).
+  // `script` is the holder's motion since it took hold (null: none, or not held yet); it moves the
+  // held segment's pose from `script_start` (its pose when the grasp took hold), as corde_run
+  // does; the holder is that pose times `script_offset_inv` (the inverse of the grasp's offset
+  // then).
+  bool scripted = false;
+  corde::GraspSpec script_spec;
   std::shared_ptr<const corde::Motion> script;
   Eigen::Isometry3d script_start = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d script_offset_inv = Eigen::Isometry3d::Identity();
@@ -98,13 +102,16 @@ class SimNode {
   void load_robot();
   void install_robot();
   void update_robot();
-  // Scripted grasps: sets each holder's goal to the keyframes' pose at t + h, reached at t + h
-  // (the holder limits still apply). Allocates nothing.
-  void drive_scripted(double t, double h);
+  // Scripted grasps: takes hold or lets go when the step from t is the one nearest grasp_time or
+  // release_time (corde::grasp_holds(); the state is in the world and grasps_, so a guard's
+  // rollback and replay do it again), and sets each holder's goal to the keyframes' pose at t + h,
+  // reached at t + h (the holder limits still apply). Allocates nothing but when taking hold.
+  void drive_scripted(corde::World* world, double t, double h);
   // An input for grasp `name` arrived, or it was let go (`what`: "grasp '<name>' <what>"): its
   // keyframes stop moving it (logged once, at INFO).
   void end_script(const std::string& name, const char* what);
   void refresh_layout();
+  void refresh_if_grasps_changed();
   void apply_inputs();
   void check_holders_and_strain();
 
@@ -171,7 +178,8 @@ class SimNode {
   corde::World world_;
   corde::GraspSet grasps_;
   std::map<std::string, GraspWiring> wiring_;
-  std::vector<std::pair<const std::string*, const GraspWiring*>> scripted_;  // run_steps' list
+  std::vector<std::pair<const std::string*, GraspWiring*>> scripted_;  // run_steps' list
+  bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
   InputQueue inputs_;
   corde::StepGuard guard_;
   corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
