@@ -9,9 +9,9 @@
 // lies in the Coulomb disc |p_t| <= mu p_n (sticking while inside, sliding on its rim), by
 // projected Gauss-Seidel over the contacts, warm started from the last step's impulses. The
 // impulses enter the step as forces p / h on the segments' nodes, split by the contact point's
-// position along the segment, and (surface friction, the default) the tangential impulse's moment
-// about the axis as torques on the segments: friction acts at the surfaces, so a rope rolls and a
-// floor brakes one spinning about its axis.
+// position along the segment, and (with surface friction, an option) the tangential impulse's
+// moment about the axis as torques on the segments: friction acts at the surfaces, so a rope rolls
+// and a floor brakes one spinning about its axis.
 #pragma once
 
 #include <cstdint>
@@ -46,10 +46,11 @@ struct ContactSettings {
   double implicit_tolerance = 1e-3;  // rounds stop once no contact closes past its target by more
                                      // than this fraction of the rod's radius over the step
   double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change
-  // Friction acts at the contact point on the surfaces (true: its moment turns the segments) or at
-  // the axes (false: no moment, as before surface friction; a rope spinning on a floor keeps its
-  // spin).
-  bool surface_friction = true;
+  // Friction acts at the contact point on the surfaces (true: its moment turns the segments, so a
+  // rope rolls and a floor brakes its spin) or at the axes (false: no moment; a rope spinning on a
+  // floor keeps its spin). Off by default: without rolling resistance, rods that rest on rolling
+  // contacts keep rolling slowly (docs/model.md, "Contacts").
+  bool surface_friction = false;
 };
 
 struct Contact {
