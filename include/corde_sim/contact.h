@@ -9,7 +9,9 @@
 // lies in the Coulomb disc |p_t| <= mu p_n (sticking while inside, sliding on its rim), by
 // projected Gauss-Seidel over the contacts, warm started from the last step's impulses. The
 // impulses enter the step as forces p / h on the segments' nodes, split by the contact point's
-// position along the segment.
+// position along the segment, and (with surface friction, an option) the tangential impulse's
+// moment about the axis as torques on the segments: friction acts at the surfaces, so a rope rolls
+// and a floor brakes one spinning about its axis.
 #pragma once
 
 #include <cstdint>
@@ -44,6 +46,11 @@ struct ContactSettings {
   double implicit_tolerance = 1e-3;  // rounds stop once no contact closes past its target by more
                                      // than this fraction of the rod's radius over the step
   double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change
+  // Friction acts at the contact point on the surfaces (true: its moment turns the segments, so a
+  // rope rolls and a floor brakes its spin) or at the axes (false: no moment; a rope spinning on a
+  // floor keeps its spin). Off by default: without rolling resistance, rods that rest on rolling
+  // contacts keep rolling slowly (docs/model.md, "Contacts").
+  bool surface_friction = false;
 };
 
 struct Contact {
@@ -56,6 +63,10 @@ struct Contact {
   Vec3 point = Vec3::Zero();             // on b's surface (world), for display
   Vec3 surface_velocity = Vec3::Zero();  // an obstacle's: the velocity of its surface at `point`
   double gap = 0.0;                      // distance between the surfaces (negative: penetration)
+  // Distances from the axes to the contact point along -normal (a) and +normal (b): the levers of
+  // friction (0 without surface friction). For two rods they split the axes' distance in the
+  // ratio of the radii, so both sides act at one point and angular momentum is kept.
+  double lever_a = 0.0, lever_b = 0.0;
   double mu = 0.0;
   double pn = 0.0;         // normal impulse of the step (N s)
   Vec3 pt = Vec3::Zero();  // tangential impulse (N s)
@@ -105,8 +116,18 @@ class ContactSystem {
   bool pair_list_valid(const World& world) const;
   void build_pair_list(const World& world);
   void warm_start();
-  void prepare_sweeps();  // per-contact inverse masses; warm impulses into the velocities
-  void apply_impulse(const Contact& c, const Vec3& p);
+  // Per-contact inverse masses (and levers); warm impulses into the velocities.
+  void prepare_sweeps(const World& world);
+  void apply_impulse(size_t k, const Vec3& p);
+  // Surface friction: the segments that turn with contact k's point (a node's point turns with
+  // both segments at the node, half each) and their world inverse inertia.
+  void prepare_levers(const World& world, size_t k);
+  // The velocity of contact k's point from the segments' rotation (relative, a's less b's).
+  Vec3 lever_velocity(size_t k) const;
+  // World angular velocities of rod r's segments from its state (after the step, implicit).
+  void take_angular_velocities(const Rod& rod, int r);
+  // Adds contact k's torque impulses for impulse p to torque_[rod][segment] (implicit).
+  void gather_torques(size_t k, const Vec3& p);
   void sweep(const ContactSettings& cs, double h, int iterations);
   void finish(World& world, double h, bool add_forces);
   static double normal_target(const Contact& c, const ContactSettings& cs, double h);
@@ -118,6 +139,21 @@ class ContactSystem {
   std::vector<std::vector<double>> inv_mass_;
   std::vector<double> scratch_w_;      // per contact: the pair's inverse mass
   std::vector<double> scratch_inv_w_;  // and its inverse (0 where the pair cannot move)
+  // Surface friction. A lever: one segment turned by a contact's friction, dw = c J (n x dp) and
+  // the point's velocity gains c w x n (c = -share times the lever, J the world inverse inertia).
+  struct Lever {
+    int rod, seg;
+    double c;
+    Eigen::Matrix3d inv_inertia;
+  };
+  struct ContactLevers {
+    int first = 0, count = 0;  // into levers_
+    Vec3 t1, t2;               // the tangent plane's basis
+    Eigen::Matrix2d inv_k;     // inverse of the pair's tangential inverse-mass block
+  };
+  std::vector<Lever> levers_;
+  std::vector<ContactLevers> contact_levers_;      // per contact (empty: no levers)
+  std::vector<std::vector<Vec3>> omega_, torque_;  // per rod and segment (world)
   std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
   std::vector<char> touched_;
   std::vector<std::vector<Vec3>> last_impulse_;  // implicit: per rod, the last step's totals

@@ -100,11 +100,15 @@ class ImplicitEuler {
   // h for backward Euler, 2h/3 for BDF2), linearised at the step's end with its Hessian:
   // dx = A^-1 p / b, A = M / b^2 + the Hessian of E + D. The rotations follow through the
   // coupling of A. Kinematic and constrained items respond only where they are free. Calling it
-  // again replaces the previous response.
-  void respond(Rod& rod, const std::vector<Vec3>& impulses);
+  // again replaces the previous response. torque_impulses: optionally also torque impulses on the
+  // segments (N m s, world, one per segment; contact friction's moment), applied as torques
+  // T / b held over the step as the step applies loads (not predicted: taken whole).
+  void respond(Rod& rod, const std::vector<Vec3>& impulses,
+               const std::vector<Vec3>* torque_impulses = nullptr);
   // The node velocity changes that respond() would add for these impulses, without changing the
   // rod (dv = A^-1 p / b^2).
-  void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv);
+  void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv,
+                const std::vector<Vec3>* torque_impulses = nullptr);
   // The last step's effective step b (s).
   double effective_step() const { return beta_; }
   bool has_prediction() const { return !predicted_.empty(); }
@@ -134,7 +138,8 @@ class ImplicitEuler {
   // inertia, rest strains, the clamps' ghost frames; the velocities under quadratic drag),
   // flattened, to tell a configured rod from the one factorised.
   static void parameters(const Rod& rod, std::vector<double>* out);
-  void solve_impulses(const std::vector<Vec3>& impulses);  // into z_
+  void solve_impulses(const std::vector<Vec3>& impulses,
+                      const std::vector<Vec3>* torque_impulses);  // into z_
   bool history_usable(const Rod& rod, double h) const;
   void remember_end(const Rod& rod);
 

@@ -137,6 +137,10 @@ class Rod {
   void integrate(double t, double h, Integrator integrator = kDefaultIntegrator);
   // Adds to the node forces of the current step (between compute_forces and integrate).
   void add_step_force(int node, const Vec3& f) { f_[node] += f; }
+  // Adds a world torque to a segment's torque of the current step (contact friction's moment).
+  void add_step_torque(int segment, const Vec3& torque) {
+    tau_[segment] += q_[segment].conjugate() * torque;
+  }
   // Which contacts the rod takes part in (contact.h).
   ContactOptions& contact_options() { return contact_; }
   const ContactOptions& contact_options() const { return contact_; }

@@ -37,6 +37,27 @@ Vec3 any_perpendicular(const Vec3& v) {
   return v.cross(a).normalized();
 }
 
+Mat3 cross_matrix(const Vec3& v) {
+  Mat3 m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+// The world inverse inertia of segment s as a contact's torque sees it: none for a kinematic
+// segment (a drive or a grasp holds it), about the axis only for one constrained to turn about
+// an axis, R diag(1/I) R^T for a free one.
+Mat3 segment_inverse_inertia(const Rod& rod, int s) {
+  if (rod.segment_drive(s)) return Mat3::Zero();
+  const Mat3 r = rod.orientations()[s].toRotationMatrix();
+  const Vec3 in = rod.segment_inertia(s);
+  for (const SegmentConstraint& c : rod.segment_constraints())
+    if (c.segment == s) {
+      const Vec3 b = r.transpose() * c.axis;
+      return c.axis * c.axis.transpose() / b.dot(in.cwiseProduct(b));
+    }
+  return r * in.cwiseInverse().asDiagonal() * r.transpose();
+}
+
 }  // namespace
 
 bool ContactSystem::needed(const World& world) {
@@ -55,6 +76,7 @@ void ContactSystem::solve(World& world, double h) {
   const int nr = static_cast<int>(rods.size());
   velocity_.resize(nr);
   inv_mass_.resize(nr);
+  omega_.resize(nr);
   const double t_end = world.time() + h;
   // The velocities each node would have after the step without contacts (drives: theirs).
   for (int r = 0; r < nr; ++r) {
@@ -75,10 +97,32 @@ void ContactSystem::solve(World& world, double h) {
       else
         drive_position(d, t_end, &v[d.node]);
     }
+    if (!world.contact.surface_friction) continue;
+    // And each segment's world angular velocity after the torques' kick (the integrator's
+    // gyroscopic or torque-free part is left out: it changes it at second order in h).
+    const int ns = rod.num_segments();
+    auto& om = omega_[r];
+    om.resize(ns);
+    for (int s = 0; s < ns; ++s)
+      om[s] =
+          rod.orientations()[s] * Vec3(rod.angular_velocities()[s] +
+                                       h * rod.torques()[s].cwiseQuotient(rod.segment_inertia(s)));
+    for (const SegmentDrive& d : rod.segment_drives()) {
+      if (d.kind == SegmentDrive::Kind::kTarget) {
+        Quat rel = d.target.normalized() * rod.orientations()[d.segment].conjugate();
+        if (rel.w() < 0.0) rel.coeffs() *= -1.0;  // the shorter way, as the drive turns
+        const Eigen::AngleAxisd turn(rel);
+        om[d.segment] = (turn.angle() / h) * turn.axis();
+      } else {
+        drive_orientation(d, t_end, &om[d.segment]);
+      }
+    }
+    for (const SegmentConstraint& c : rod.segment_constraints())
+      om[c.segment] = c.axis * c.axis.dot(om[c.segment]);
   }
   detect(world, h);
   warm_start();
-  prepare_sweeps();
+  prepare_sweeps(world);
   sweep(world.contact, h, world.contact.iterations);
   finish(world, h, true);
 }
@@ -88,6 +132,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   const int nr = static_cast<int>(rods.size());
   velocity_.resize(nr);
   inv_mass_.resize(nr);
+  omega_.resize(nr);
   // Each rod's velocities after its step without contacts; detection at the step's start.
   held_x_.resize(nr);
   held_v_.resize(nr);
@@ -95,6 +140,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     Rod& rod = rods[r];
     const int nn = rod.num_nodes();
     velocity_[r] = rod.velocities();
+    if (world.contact.surface_friction) take_angular_velocities(rod, r);
     auto& w = inv_mass_[r];
     w.resize(nn);
     for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
@@ -110,7 +156,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     rods[r].velocities().swap(held_v_[r]);
   }
   warm_start();
-  prepare_sweeps();
+  prepare_sweeps(world);
   // Rounds: Gauss-Seidel sweeps against the rods' true velocities, with each node's own mass
   // (which responds more than the stiffness-coupled rod does, so they find too little impulse),
   // then the rods' true response to that change of the impulses, scaled by the factor that best
@@ -129,12 +175,18 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   }
   impulse_.resize(nr);
   change_v_.resize(nr);
+  torque_.resize(nr);
+  const bool levers = !levers_.empty();  // torque impulses too (surface friction)
   auto gather = [&](auto&& impulse_of) {
     for (int r = 0; r < nr; ++r)
-      if (touched_[r]) impulse_[r].assign(rods[r].num_nodes(), Vec3::Zero());
+      if (touched_[r]) {
+        impulse_[r].assign(rods[r].num_nodes(), Vec3::Zero());
+        if (levers) torque_[r].assign(rods[r].num_segments(), Vec3::Zero());
+      }
     for (size_t k = 0; k < nc; ++k) {
       const Contact& c = contacts_[k];
       const Vec3 p = impulse_of(k);
+      if (levers) gather_torques(k, p);
       impulse_[c.rod_a][c.seg_a] += (1.0 - c.s_a) * p;
       impulse_[c.rod_a][c.seg_a + 1] += c.s_a * p;
       if (c.rod_b >= 0) {
@@ -147,8 +199,9 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     gather([&](size_t k) { return Vec3(contacts_[k].pn * contacts_[k].normal + contacts_[k].pt); });
     for (int r = 0; r < nr; ++r) {
       if (!touched_[r]) continue;
-      steppers[r].respond(rods[r], impulse_[r]);
+      steppers[r].respond(rods[r], impulse_[r], levers ? &torque_[r] : nullptr);
       velocity_[r] = rods[r].velocities();
+      if (levers) take_angular_velocities(rods[r], r);
     }
   };
   respond_all();
@@ -193,7 +246,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
     });
     for (int r = 0; r < nr; ++r)
-      if (touched_[r]) steppers[r].response(rods[r], impulse_[r], &change_v_[r]);
+      if (touched_[r])
+        steppers[r].response(rods[r], impulse_[r], &change_v_[r], levers ? &torque_[r] : nullptr);
     auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
       return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
     };
@@ -240,10 +294,12 @@ double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs,
   return c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
 }
 
-void ContactSystem::prepare_sweeps() {
+void ContactSystem::prepare_sweeps(const World& world) {
   std::vector<double>& wsum = scratch_w_;
   wsum.resize(contacts_.size());
   scratch_inv_w_.resize(contacts_.size());
+  levers_.clear();
+  contact_levers_.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
     const auto& wa = inv_mass_[c.rod_a];
@@ -254,16 +310,83 @@ void ContactSystem::prepare_sweeps() {
     }
     wsum[k] = w;
     scratch_inv_w_[k] = w > 0.0 ? 1.0 / w : 0.0;
-    if (w > 0.0) apply_impulse(c, c.pn * c.normal + c.pt);
+    contact_levers_[k].count = 0;
+    if (w > 0.0 && (c.lever_a > 0.0 || c.lever_b > 0.0)) prepare_levers(world, k);
+    if (w > 0.0) apply_impulse(k, c.pn * c.normal + c.pt);
   }
 }
 
-void ContactSystem::apply_impulse(const Contact& c, const Vec3& p) {
+// The segments that turn with contact k's point, and the pair's tangential inverse mass with their
+// rotation: an impulse P at lever L turns a segment by J (L x P) and moves the point by that
+// times L, so the inverse mass gains [L]x^T J [L]x; the normal row does not (L is along n).
+void ContactSystem::prepare_levers(const World& world, size_t k) {
+  const Contact& c = contacts_[k];
+  ContactLevers& cl = contact_levers_[k];
+  cl.first = static_cast<int>(levers_.size());
+  auto add_side = [&](int r, int seg, double s, double lever) {
+    if (!(lever > 0.0)) return;
+    const Rod& rod = world.rods()[r];
+    // A point at a node turns with both segments there, each taking half its torque.
+    const int other = s <= 0.0 && seg > 0                        ? seg - 1
+                      : s >= 1.0 && seg + 1 < rod.num_segments() ? seg + 1
+                                                                 : -1;
+    const double share = other >= 0 ? 0.5 : 1.0;
+    for (int q : {seg, other})
+      if (q >= 0) levers_.push_back({r, q, -share * lever, segment_inverse_inertia(rod, q)});
+  };
+  add_side(c.rod_a, c.seg_a, c.s_a, c.lever_a);
+  if (c.rod_b >= 0) add_side(c.rod_b, c.seg_b, c.s_b, c.lever_b);
+  cl.count = static_cast<int>(levers_.size()) - cl.first;
+  const Mat3 nx = cross_matrix(c.normal);
+  Mat3 k3 = scratch_w_[k] * Mat3::Identity();
+  for (int i = cl.first; i < cl.first + cl.count; ++i) {
+    const Lever& l = levers_[i];
+    k3 -= (l.c * l.c) * (nx * l.inv_inertia * nx);
+  }
+  cl.t1 = any_perpendicular(c.normal);
+  cl.t2 = c.normal.cross(cl.t1);
+  Eigen::Matrix2d kt;
+  kt << cl.t1.dot(k3 * cl.t1), cl.t1.dot(k3 * cl.t2), cl.t2.dot(k3 * cl.t1), cl.t2.dot(k3 * cl.t2);
+  cl.inv_k = kt.inverse();  // kt >= w I, w > 0
+}
+
+Vec3 ContactSystem::lever_velocity(size_t k) const {
+  const ContactLevers& cl = contact_levers_[k];
+  Vec3 w = Vec3::Zero();
+  for (int i = cl.first; i < cl.first + cl.count; ++i)
+    w += levers_[i].c * omega_[levers_[i].rod][levers_[i].seg];
+  return w.cross(contacts_[k].normal);
+}
+
+void ContactSystem::take_angular_velocities(const Rod& rod, int r) {
+  const int ns = rod.num_segments();
+  auto& om = omega_[r];
+  om.resize(ns);
+  for (int s = 0; s < ns; ++s) om[s] = rod.orientations()[s] * rod.angular_velocities()[s];
+}
+
+void ContactSystem::gather_torques(size_t k, const Vec3& p) {
+  const ContactLevers& cl = contact_levers_[k];
+  if (cl.count == 0) return;
+  const Vec3 np = contacts_[k].normal.cross(p);
+  for (int i = cl.first; i < cl.first + cl.count; ++i)
+    torque_[levers_[i].rod][levers_[i].seg] += levers_[i].c * np;
+}
+
+void ContactSystem::apply_impulse(size_t k, const Vec3& p) {
+  const Contact& c = contacts_[k];
   velocity_[c.rod_a][c.seg_a] += ((1.0 - c.s_a) * inv_mass_[c.rod_a][c.seg_a]) * p;
   velocity_[c.rod_a][c.seg_a + 1] += (c.s_a * inv_mass_[c.rod_a][c.seg_a + 1]) * p;
   if (c.rod_b >= 0) {
     velocity_[c.rod_b][c.seg_b] -= ((1.0 - c.s_b) * inv_mass_[c.rod_b][c.seg_b]) * p;
     velocity_[c.rod_b][c.seg_b + 1] -= (c.s_b * inv_mass_[c.rod_b][c.seg_b + 1]) * p;
+  }
+  const ContactLevers& cl = contact_levers_[k];
+  if (cl.count == 0) return;
+  const Vec3 np = c.normal.cross(p);  // the torque of p at a unit lever along -n
+  for (int i = cl.first; i < cl.first + cl.count; ++i) {
+    const Lever& l = levers_[i];
+    omega_[l.rod][l.seg] += l.c * (l.inv_inertia * np);
   }
 }
 
@@ -283,24 +406,34 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
       const double w = wsum[k];
       if (!(w > 0.0)) continue;
       const double iw = inv_w[k];
-      // Relative to the other surface: a rod's, or a (moving) obstacle's.
+      // Relative to the other surface: a rod's, or a (moving) obstacle's; at the surfaces' common
+      // point with surface friction (the segments' rotation adds a tangential part).
+      const ContactLevers& cl = contact_levers_[k];
       Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
       vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
+      if (cl.count > 0) vr += lever_velocity(k);
       const double target = normal_target(c, cs, h);
       const double vn = vr.dot(c.normal);
       const double pn = std::max(0.0, c.pn + (target - vn) * iw);
       Vec3 dp = (pn - c.pn) * c.normal;
       c.pn = pn;
-      // Friction: the impulse that stops the sliding, projected onto the Coulomb disc.
-      // (An impulse P changes the relative velocity by w P: the pair's inverse mass is a scalar.)
+      // Friction: the impulse that stops the sliding, projected onto the Coulomb disc. Without
+      // levers an impulse P changes the relative velocity by w P (a scalar inverse mass); with
+      // them the tangential block is 2x2, solved exactly (the normal impulse turns nothing).
       const Vec3 after = vr + w * dp;
       const Vec3 vt = after - c.normal * after.dot(c.normal);
-      Vec3 pt = c.pt - vt * iw;
+      Vec3 pt;
+      if (cl.count == 0) {
+        pt = c.pt - vt * iw;
+      } else {
+        const Eigen::Vector2d d = cl.inv_k * Eigen::Vector2d(cl.t1.dot(vt), cl.t2.dot(vt));
+        pt = c.pt - d.x() * cl.t1 - d.y() * cl.t2;
+      }
       const double limit = c.mu * c.pn, norm2 = pt.squaredNorm();
       if (norm2 > limit * limit) pt *= limit / std::sqrt(norm2);
       dp += pt - c.pt;
       c.pt = pt;
-      apply_impulse(c, dp);
+      apply_impulse(k, dp);
       change2 = std::max(change2, dp.squaredNorm());
       largest = std::max(largest, c.pn);
     }
@@ -314,7 +447,8 @@ void ContactSystem::finish(World& world, double h, bool add_forces) {
   auto& rods = world.rods();
   previous_.clear();
   stats_.active = 0;
-  for (const Contact& c : contacts_) {
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
     if (c.pn <= 0.0) continue;
     ++stats_.active;
     previous_.push_back({pair_key(c), c.pn, c.pt});
@@ -326,6 +460,11 @@ void ContactSystem::finish(World& world, double h, bool add_forces) {
       rods[c.rod_b].add_step_force(c.seg_b, -(1.0 - c.s_b) * f);
       rods[c.rod_b].add_step_force(c.seg_b + 1, -c.s_b * f);
     }
+    // Friction's moment about the axes (surface friction).
+    const ContactLevers& cl = contact_levers_[k];
+    const Vec3 nf = c.normal.cross(f);
+    for (int i = cl.first; i < cl.first + cl.count; ++i)
+      rods[levers_[i].rod].add_step_torque(levers_[i].seg, levers_[i].c * nf);
   }
   std::sort(previous_.begin(), previous_.end(),
             [](const Previous& a, const Previous& b) { return a.key < b.key; });
@@ -386,6 +525,7 @@ void ContactSystem::detect(World& world, double h) {
           c.normal = f.normal;
           c.point = f.on_obstacle;
           c.gap = f.distance - radius;
+          if (cs.surface_friction) c.lever_a = radius;  // at the rod's surface
           const Obstacle& ob = obs.obstacle(which_[k]);
           c.mu = ob.friction;
           c.surface_velocity = ob.velocity_at(f.on_obstacle);
@@ -488,6 +628,10 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     c.normal = dist > 1e-12 * (ra_ + rb_) ? Vec3(d / dist) : any_perpendicular(xa[sa + 1] - xa[sa]);
     c.point = pb + rb_ * c.normal;
     c.gap = gap;
+    if (cs.surface_friction) {  // one point for both sides, between the surfaces
+      c.lever_a = dist * ra_ / (ra_ + rb_);
+      c.lever_b = dist * rb_ / (ra_ + rb_);
+    }
     const double ma =
         rod_a.contact_options().friction >= 0.0 ? rod_a.contact_options().friction : cs.friction;
     const double mb =

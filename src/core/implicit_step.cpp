@@ -654,29 +654,38 @@ bool ImplicitEuler::factor_reusable(const Rod& rod) {
   return true;
 }
 
-void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses) {
+void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses,
+                                   const std::vector<Vec3>* torque_impulses) {
   const double h = beta_;
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
   if (!predicted_.empty())
     for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
+  // A torque T / h held over the step enters as the loads' torques do (gradient()): in the frame
+  // of the rotation over the step, mapped to the increment at the step's result.
+  if (torque_impulses)
+    for (int s = 0; s + 1 < nn; ++s)
+      if (!(*torque_impulses)[s].isZero())
+        z_.segment<3>(6 * s + 3) +=
+            inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * (*torque_impulses)[s]) / h;
   project_gradient(&z_);
   solver_.solve(&z_);
   project_gradient(&z_);
 }
 
 void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
-                             std::vector<Vec3>* dv) {
+                             std::vector<Vec3>* dv, const std::vector<Vec3>* torque_impulses) {
   const int nn = rod.num_nodes();
   const double h = beta_;
   dv->assign(nn, Vec3::Zero());
   if (!ensure_factor(rod)) return;
-  solve_impulses(impulses);
+  solve_impulses(impulses, torque_impulses);
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
-void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses) {
+void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses,
+                            const std::vector<Vec3>* torque_impulses) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
   const double h = beta_;
   auto& x = rod.positions();
@@ -688,7 +697,7 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses) {
   v = v_free_;
   w = w_free_;
   if (ensure_factor(rod)) {
-    solve_impulses(impulses);
+    solve_impulses(impulses, torque_impulses);
     for (int i = 0; i < nn; ++i) {
       if (kind_[2 * i] == 1) continue;
       x[i] += z_.segment<3>(6 * i);

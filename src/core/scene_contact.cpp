@@ -266,6 +266,7 @@ void read_contact_settings(const Value& v, ContactSettings* s) {
     if (s->push_out > 1.0) p->fail("must be <= 1");
   }
   if (auto p = m.find("max_push_speed")) s->max_push_speed = p->non_negative();
+  if (auto p = m.find("surface_friction")) s->surface_friction = p->boolean();
   m.finish();
 }
 
