@@ -42,7 +42,11 @@ struct ContactSettings {
   double max_push_speed = 0.5;  // m/s, cap on the separating speed that removes penetration
   // Implicit integrator: rounds of sweeps, each followed by the rods' true (stiffness-coupled)
   // response to the impulses (ContactSystem::solve_implicit).
-  int implicit_rounds = 30;          // at most
+  int implicit_rounds = 30;  // at most
+  // Sweeps per round: the sweeps answer with each node's mass alone, which a stiff rod's true
+  // response corrects in the round anyway, so sweeping them to convergence is wasted (a rope
+  // springing open on a floor: 2 sweeps a round cost 2.5x less than 30 at the same penetration).
+  int implicit_sweeps = 2;
   double implicit_tolerance = 1e-3;  // rounds stop once no contact closes past its target by more
                                      // than this fraction of the rod's radius over the step
   double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change

@@ -228,7 +228,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     for (size_t k = 0; k < nc; ++k) old_[k] = {0, contacts_[k].pn, contacts_[k].pt};
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) held_v_[r] = velocity_[r];  // the true velocities
-    sweep(cs, h, cs.iterations);
+    sweep(cs, h, cs.implicit_sweeps);
     double change = 0.0, largest = 0.0;
     for (size_t k = 0; k < nc; ++k) {
       const Contact& c = contacts_[k];

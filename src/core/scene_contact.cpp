@@ -259,6 +259,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
 void read_contact_settings(const Value& v, ContactSettings* s) {
   Map m(v);
   if (auto p = m.find("iterations")) s->iterations = p->integer(1, 10000);
+  if (auto p = m.find("implicit_sweeps")) s->implicit_sweeps = p->integer(1, 10000);
   if (auto p = m.find("friction")) s->friction = p->non_negative();
   if (auto p = m.find("skin")) s->skin = p->non_negative();
   if (auto p = m.find("push_out")) {
