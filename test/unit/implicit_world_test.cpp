@@ -176,11 +176,12 @@ TEST(ImplicitWorld, RopeOnTiltedPlaneSticksOrSlides) {
 }
 
 // The sweeps of a round answer with node masses alone and the rods' true response corrects them, so
-// few sweeps a round (ContactSettings::implicit_sweeps) change the cost, not the result: a bent
-// rope (self contact on) dropped on a floor, as it lands and comes to rest, with 2 sweeps a round
-// and with 30 (the former setting). Its contacts hold to the same depth and it rests in the same
-// place to a small fraction of its radius. The key is read from the scene and checked.
-Scene bent_rope_on_floor(int sweeps) {
+// few sweeps a round (ContactSettings::implicit_sweeps) change the cost, not the result: a coiled
+// rope that has set (rest_shape: created), its end lying across its start, dropped from 10 cm onto
+// a floor (self contact on), as it lands and settles, with 2 sweeps a round and with 30 (the
+// former setting). Its contacts hold to the same depth and it lies in the same place to a small
+// fraction of its radius, with a ninth of the sweeps. The key is read from the scene and checked.
+Scene dropped_coil(int sweeps) {
   std::string y =
       "time_step: 2.0e-3\nintegrator: implicit_euler\n"
       "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: 0.5}\n"
@@ -189,13 +190,15 @@ Scene bent_rope_on_floor(int sweeps) {
       "}\n"
       "rods:\n  - name: rope\n    elements: 60\n    radius: 0.005\n"
       "    material: {preset: nylon_rope, E: 1.0e7, E_s: 1.0e7}\n"
-      "    contact: {self: true}\n"
+      "    contact: {self: true}\n    rest_shape: created\n"
       "    shape:\n      type: polyline\n      points:\n";
-  // A planar arc 3 cm above the floor.
-  for (int i = 0; i <= 120; ++i) {
-    const double s = i / 120.0;
+  // 1.15 turns of radius 0.1 m rising 1.2 cm a turn.
+  const double radius = 0.1, turns = 1.15;
+  for (int i = 0; i <= 200; ++i) {
+    const double a = 2.0 * kPi * turns * i / 200.0;
     char p[96];
-    std::snprintf(p, sizeof p, "        - [%.9f, %.9f, 0.03]\n", 0.3 * std::sin(kPi * s), 0.12 * s);
+    std::snprintf(p, sizeof p, "        - [%.9f, %.9f, %.9f]\n", radius * std::cos(a),
+                  radius * std::sin(a), 0.1 + 0.012 * a / (2.0 * kPi));
     y += p;
   }
   Scene scene = parse_scene(y);
@@ -204,27 +207,37 @@ Scene bent_rope_on_floor(int sweeps) {
 }
 
 TEST(ImplicitWorld, FewSweepsARoundGiveTheSameRest) {
-  Scene few = bent_rope_on_floor(2), many = bent_rope_on_floor(30);
+  Scene few = dropped_coil(2), many = dropped_coil(30);
   double deepest[2] = {0.0, 0.0};
-  for (int k = 0; k < 500; ++k) {  // 1 s: the fall (about 0.08 s), landing and rest
+  long sweeps[2] = {0, 0};
+  for (int k = 0; k < 500; ++k) {  // 1 s: the fall (about 0.14 s), landing and settling
     few.world.step(1);
     many.world.step(1);
     deepest[0] = std::max(deepest[0], few.world.contacts()->stats().max_penetration);
     deepest[1] = std::max(deepest[1], many.world.contacts()->stats().max_penetration);
+    sweeps[0] += few.world.contacts()->stats().iterations;
+    sweeps[1] += many.world.contacts()->stats().iterations;
   }
   const double r = 0.005;
-  EXPECT_LT(deepest[0], 0.01 * r);
-  EXPECT_LT(deepest[1], 0.01 * r);
+  // At the impact (1.4 m/s, h = 2 ms) the overlap found at a step's start reaches about 3 % of
+  // the radius either way (measured 3.3 % and 2.9 %), then is pushed out.
+  EXPECT_LT(deepest[0], 0.05 * r);
+  EXPECT_LT(deepest[1], 0.05 * r);
+  EXPECT_LT(std::abs(deepest[0] - deepest[1]), 0.01 * r);
   const auto& a = few.world.rods()[0].positions();
   const auto& b = many.world.rods()[0].positions();
   double apart = 0.0;
   for (size_t i = 0; i < a.size(); ++i) apart = std::max(apart, (a[i] - b[i]).norm());
-  EXPECT_LT(apart, 0.05 * r);
-  EXPECT_LT(mean_velocity_of(few.world.rods()[0]).norm(), 1e-3);
-  EXPECT_LT(few.world.contacts()->stats().iterations, many.world.contacts()->stats().iterations);
+  EXPECT_LT(apart, 0.15 * r);  // measured 0.067 r
+  EXPECT_LT(mean_velocity_of(few.world.rods()[0]).norm(), 1e-2);
+  EXPECT_LT(2 * sweeps[0], sweeps[1]);  // the sweeps saved
+  std::printf("sweeps %ld against %ld; deepest %.3g and %.3g of r; apart %.3g of r\n", sweeps[0],
+              sweeps[1], deepest[0] / r, deepest[1] / r, apart / r);
   // Out of range: refused with the key's path.
   try {
-    parse_scene("rods:\n  - {name: r}\ncontact: {implicit_sweeps: 0}\n");
+    parse_scene(
+        "rods:\n  - {name: r, material: {preset: nylon_rope}, shape: {type: straight}}\n"
+        "contact: {implicit_sweeps: 0}\n");
     ADD_FAILURE() << "implicit_sweeps: 0 accepted";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("contact.implicit_sweeps"), std::string::npos) << e.what();
