@@ -49,8 +49,10 @@ int grasp_segment(const Rod& rod, const GraspSpec& spec);
 
 // Whether the grasp holds during the step from t to t + h: from the step that starts nearest
 // grasp_time up to the one that starts nearest release_time (within half a step, so that round-off
-// in t and the halved steps of the stability guard's replays take hold and let go as the first run
-// did). With h = 0: whether it holds at the instant t (statics).
+// in t does not move them). The stability guard's halved replays take hold and let go at the same
+// instant as the first run only when the times are on the step grid; elsewhere the replay's
+// nearest (halved) step may start up to half a step from the first run's. With h = 0: whether it
+// holds at the instant t (statics).
 bool grasp_holds(const GraspSpec& spec, double t, double h);
 
 // The holder's keyframed motion for a grasp whose holder takes hold at `start` (null without

@@ -71,8 +71,10 @@ ImplicitStep implicit_time_step(const Scene& scene) {
     bool clamped = rod.ghost_start().active || rod.ghost_end().active ||
                    !rod.segment_drives().empty() || !rod.segment_constraints().empty();
     bool held = clamped || !rod.node_drives().empty() || !rod.node_constraints().empty();
+    // Only a grasp that holds for the whole run: a late or released one leaves the rod free for
+    // a while, and a free rod's lowest mode is the higher one (the smaller step).
     for (const GraspSpec& spec : scene.grasps)
-      if (spec.rod == rod.name()) {
+      if (spec.rod == rod.name() && spec.grasp_time <= 0.0 && std::isinf(spec.release_time)) {
         held = true;
         clamped = clamped || spec.hold_orientation;
       }

@@ -245,10 +245,21 @@ void SimNode::end_script(const std::string& name, const char* what) {
   if (w == wiring_.end() || !w->second.scripted) return;
   w->second.scripted = false;
   w->second.script.reset();
+  // A rollback to before this point would bring back grasps_ but not the script: a take-hold or
+  // release the script did since would be lost (held never, or held for good).
+  guard_.mark_good(world_);
   ROS_INFO(
       "corde_sim: grasp '%s' %s: its scene keyframes (and grasp or release time) no longer drive "
       "it (t = %.3f s)",
       name.c_str(), what, sim_time());
+}
+
+bool SimNode::waiting_to_take_hold(const std::string& name) const {
+  auto w = wiring_.find(name);
+  const corde::GraspState* g = grasps_.find(name);
+  if (!g || g->held || w == wiring_.end() || !w->second.scripted) return false;
+  // As corde::grasp_holds(): the step starting within half a step of release_time lets go.
+  return world_.time() < w->second.script_spec.release_time - 0.5 * world_.time_step;
 }
 
 void SimNode::wire_grasp(const std::string& name, GraspWiring* w) {
@@ -449,6 +460,15 @@ void SimNode::update_tf_holders() {
 
 void SimNode::on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg) {
   const corde::GraspState* g = grasps_.find(name);
+  if (waiting_to_take_hold(name)) {
+    // Refused, the script kept: a publisher streaming poses from the start must not cancel the
+    // grasp_time (the pose of an unheld grasp could not move anything anyway).
+    ROS_WARN_THROTTLE(2.0,
+                      "corde_sim: pose for grasp '%s' ignored: it takes hold at its grasp_time "
+                      "t = %g s (now %.3f s); its poses are followed from then on",
+                      name.c_str(), wiring_.at(name).script_spec.grasp_time, world_.time());
+    return;
+  }
   if (!g || !g->held) {
     ROS_WARN_THROTTLE(2.0, "corde_sim: pose for grasp '%s' ignored: it is released", name.c_str());
     return;
@@ -534,6 +554,14 @@ void SimNode::apply_inputs() {
     if (w == wiring_.end()) continue;  // the scene was replaced since
     switch (e.kind) {
       case InputEvent::Kind::kPose: {
+        const corde::GraspState* g = grasps_.find(e.grasp);
+        if (!g || !g->held) {
+          // Let go since the pose was queued: it would move nothing, and must not end a script
+          // that still takes hold later.
+          ROS_WARN_THROTTLE(2.0, "corde_sim: pose for grasp '%s' ignored: it is not held",
+                            e.grasp.c_str());
+          break;
+        }
         double& last = w->second.last_input_time;
         if (last >= 0.0 && e.input_time < last) {
           ROS_WARN_THROTTLE(1.0,

@@ -248,8 +248,7 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
 
 bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   const corde::GraspState* g = grasps_.find(req.name);
-  auto w = wiring_.find(req.name);
-  if (g && !g->held && w != wiring_.end() && w->second.scripted) {
+  if (waiting_to_take_hold(req.name)) {
     // A scene grasp waiting for its grasp_time: it will not take hold.
     end_script(req.name, "was released (~release) before its grasp_time");
     res.success = true;

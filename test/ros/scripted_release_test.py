@@ -3,14 +3,15 @@
 """A scene grasp with grasp_time and release_time: listed but not holding before grasp_time (the
 rope's end falls), holding from then on (its keyframe reached, reactions published), let go at
 release_time (the end falls again, no more reactions) (scripted_release.test, scene
-test/ros/scenes/scripted_release.yaml)."""
+test/ros/scenes/scripted_release.yaml). Poses published before grasp_time are refused and leave the
+script running; ~release after release_time answers that the grasp is already released."""
 import time
 import unittest
 
 import numpy as np
 import rospy
 import rostest
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import PoseStamped, WrenchStamped
 
 import corde_rostest as ct
 from corde_sim.srv import ListGrasps
@@ -27,6 +28,7 @@ class ScriptedRelease(unittest.TestCase):
         rospy.init_node("scripted_release_test")
         cls.sim = ct.Sim()
         cls.reactions = ct.Recorder("/grasps/gripper/reaction", WrenchStamped)
+        cls.pose_pub = rospy.Publisher("/grasps/gripper/pose", PoseStamped, queue_size=10)
 
     def grasp(self):
         r = self.sim.service("list_grasps", ListGrasps)()
@@ -55,6 +57,15 @@ class ScriptedRelease(unittest.TestCase):
         self.assertEqual(self.grasp(), (False, "scripted"))
         self.assertEqual(self.reactions.messages(), [])
 
+        # A pose stream before grasp_time is refused: the script (and its grasp_time) stays.
+        self.assertTrue(ct.wait_connected(self.pose_pub))
+        for _ in range(5):
+            self.pose_pub.publish(ct.pose_msg(LIFTED, np.eye(3)))
+            time.sleep(0.05)
+        time.sleep(0.5)
+        self.step_to(0.35)  # (the node applies queued inputs when it steps)
+        self.assertEqual(self.grasp(), (False, "scripted"))
+
         # From grasp_time: held where it was, then lifted to the keyframe and held there.
         s = self.step_to(0.55)
         self.assertEqual(self.grasp(), (True, "scripted"))
@@ -80,6 +91,12 @@ class ScriptedRelease(unittest.TestCase):
         time.sleep(1.0)
         self.assertEqual(self.reactions.messages(since), [])
         self.assertTrue(ct.valid_state(s))
+
+        # ~release after release_time: the script let it go already, nothing is ended.
+        r = self.sim.release("gripper")
+        self.assertFalse(r.success, r.message)
+        self.assertIn("already released", r.message)
+        self.assertEqual(self.grasp(), (False, "scripted"))
 
 
 if __name__ == "__main__":

@@ -291,12 +291,12 @@ TEST(GraspTimes, BadKeysAreRefusedWithTheirPaths) {
   EXPECT_DOUBLE_EQ(s.grasps[0].motion->end_time(), 1.0);  // in the time since grasp_time
 }
 
-// A fault (a NaN put into the rope once, as a blow-up would) after the release, found by the
-// guard's check after it: the guard rolls back to its snapshot taken while the grasp held, before
-// the release, and replays. The replay must go on holding the grasp as it took hold (not take
-// hold afresh where the rope is at the snapshot, which would shift its keyframes by the lift so
-// far) and let go again: the rope ends where the run without the fault puts it, the grasp's
-// drives gone.
+// A fault (a NaN put into the rope once, as a blow-up would, at step 256 while the grasp holds)
+// found by the guard's check at step 400, after the release at 300: the guard rolls back to its
+// snapshot at step 200, taken while the grasp held, and replays across the release. The replay must
+// go on holding the grasp as it took hold (not take hold afresh where the rope is at the snapshot,
+// which would shift its keyframes by the lift so far) and let go again: the rope ends where the run
+// without the fault puts it, the grasp's drives gone.
 TEST(GraspTimes, RollbackReplaysTheScriptedRelease) {
   const double h = 2.5e-4;
   char keys[200];
@@ -308,7 +308,7 @@ TEST(GraspTimes, RollbackReplaysTheScriptedRelease) {
     Scene s = parse_scene(free_rope(keys, h, 600 * h));
     RunOptions o;
     o.guard.check_every = 200;  // snapshots at 200 steps (holding) and 400 (free)
-    o.progress_interval = 0.0;  // called after every 256 steps: between the release and 400
+    o.progress_interval = 0.0;  // called after every 256 steps: first at 256, between 200 and 400
     bool done = false;
     if (fault)
       o.progress = [&](double, double, double) {
@@ -336,7 +336,7 @@ TEST(GraspTimes, RollbackReplaysTheScriptedRelease) {
 }
 
 // The shipped pick_and_place scene: the gripper closes on the cable lying on the table at 0.5 s,
-// carries it 0.4 m along y, lays it down and opens at 4 s; the cable ends at rest on the table
+// carries it 0.4 m along y, lays it down and opens at 4.2 s; the cable ends at rest on the table
 // top (every node within its radius of lying on it), never deeper in the table than 1 % of its
 // radius (every step), moved by the carried distance. Without contacts the same script lowers it
 // through the table (the check can fail).

@@ -108,8 +108,12 @@ class SimNode {
   // reached at t + h (the holder limits still apply). Allocates nothing but when taking hold.
   void drive_scripted(corde::World* world, double t, double h);
   // An input for grasp `name` arrived, or it was let go (`what`: "grasp '<name>' <what>"): its
-  // keyframes stop moving it (logged once, at INFO).
+  // keyframes stop moving it (logged once, at INFO). The state then becomes the guard's state to
+  // go back to: its snapshot does not hold the scripted flags.
   void end_script(const std::string& name, const char* what);
+  // Whether grasp `name` is scripted, not held and its script will still take hold (before its
+  // grasp_time, or unable to take hold yet): not one its script already let go.
+  bool waiting_to_take_hold(const std::string& name) const;
   void refresh_layout();
   void refresh_if_grasps_changed();
   void apply_inputs();
