@@ -52,9 +52,16 @@ struct ContactSettings {
   double max_round_scale = 100.0;    // cap on a round's scaling of the impulses' change
   // Friction acts at the contact point on the surfaces (true: its moment turns the segments, so a
   // rope rolls and a floor brakes its spin) or at the axes (false: no moment; a rope spinning on a
-  // floor keeps its spin). Off by default: without rolling resistance, rods that rest on rolling
-  // contacts keep rolling slowly (docs/model.md, "Contacts").
+  // floor keeps its spin; rolling_friction brakes it). Off by default: the shipped scenes and
+  // their figures are those with friction at the axes (docs/model.md, "Contacts").
   bool surface_friction = false;
+  // Rolling resistance (dimensionless): a contact resists the touching bodies' relative rotation
+  // about axes in its tangent plane with a torque of at most rolling_friction x r x the normal
+  // force (r the rod's radius; for two rods the harmonic mean of theirs). It brakes a rope
+  // spinning about its own axis on a floor (twist unwinding through a lying end) and, with
+  // surface friction, a rope rolling on it. Spin about the normal is left to the sliding friction
+  // of neighbouring contacts.
+  double rolling_friction = 0.05;
 };
 
 struct Contact {
@@ -72,8 +79,11 @@ struct Contact {
   // ratio of the radii, so both sides act at one point and angular momentum is kept.
   double lever_a = 0.0, lever_b = 0.0;
   double mu = 0.0;
-  double pn = 0.0;         // normal impulse of the step (N s)
-  Vec3 pt = Vec3::Zero();  // tangential impulse (N s)
+  double roll = 0.0;                 // rolling resistance: the largest torque per normal force (m)
+  Vec3 surface_spin = Vec3::Zero();  // an obstacle's angular velocity (world)
+  double pn = 0.0;                   // normal impulse of the step (N s)
+  Vec3 pt = Vec3::Zero();            // tangential impulse (N s)
+  Vec3 pr = Vec3::Zero();  // rolling resistance's torque impulse on a's segment (N m s; -pr on b's)
 };
 
 // Statistics of the last step, for diagnostics and tests.
@@ -112,6 +122,11 @@ class ContactSystem {
                ? &last_impulse_[r]
                : nullptr;
   }
+  // And the segment torque impulses (surface friction's moments, rolling resistance; null if none).
+  const std::vector<Vec3>* last_torque_impulses(int r) const {
+    return r < static_cast<int>(last_torque_.size()) && !last_torque_[r].empty() ? &last_torque_[r]
+                                                                                 : nullptr;
+  }
   const ContactStats& stats() const { return stats_; }
 
  private:
@@ -132,6 +147,11 @@ class ContactSystem {
   void take_angular_velocities(const Rod& rod, int r);
   // Adds contact k's torque impulses for impulse p to torque_[rod][segment] (implicit).
   void gather_torques(size_t k, const Vec3& p);
+  // Rolling resistance: contact k's rows (inverse inertias of the two segments, tangent basis).
+  void prepare_roll(const World& world, size_t k);
+  // One Gauss-Seidel update of contact k's rolling torque, bounded by roll x pn.
+  void sweep_roll(size_t k);
+  void apply_roll(size_t k, const Vec3& dt);
   void sweep(const ContactSettings& cs, double h, int iterations);
   void finish(World& world, double h, bool add_forces);
   static double normal_target(const Contact& c, const ContactSettings& cs, double h);
@@ -156,11 +176,20 @@ class ContactSystem {
     Eigen::Matrix2d inv_k;     // inverse of the pair's tangential inverse-mass block
   };
   std::vector<Lever> levers_;
-  std::vector<ContactLevers> contact_levers_;      // per contact (empty: no levers)
+  std::vector<ContactLevers> contact_levers_;  // per contact (empty: no levers)
+  struct RollRow {
+    bool active = false;
+    Eigen::Matrix3d wa, wb;  // world inverse inertias of a's and b's segments (b: 0, obstacle)
+    Vec3 t1, t2;             // the tangent plane's basis
+    Eigen::Matrix2d inv_k;   // inverse of the pair's rotational inverse inertia in that plane
+  };
+  std::vector<RollRow> rolls_;  // per contact when rolling resistance is on
+  bool spin_ = false;           // the sweeps track the segments' angular velocities (omega_)
   std::vector<std::vector<Vec3>> omega_, torque_;  // per rod and segment (world)
   std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
   std::vector<char> touched_;
   std::vector<std::vector<Vec3>> last_impulse_;  // implicit: per rod, the last step's totals
+  std::vector<std::vector<Vec3>> last_torque_;   // and its torque impulses
   std::vector<SegmentContact> found_;
   std::vector<int> which_;
   struct CellEntry {
@@ -190,6 +219,7 @@ class ContactSystem {
     std::uint64_t key;
     double pn;
     Vec3 pt;
+    Vec3 pr;
   };
   std::vector<Previous> previous_;
   std::vector<Previous> old_;  // implicit: the impulses before a round's sweeps

@@ -10,9 +10,12 @@
 // loads, D the dissipation potential of internal friction and drag. Its stationarity conditions
 // are backward Euler for the nodes and, to first order in theta, for the rotations (the
 // gyroscopic term w x I w is left out: for the thin sections of rods it is small and its effect
-// is bounded). Newton iterations on the increments (dx, dtheta) use the positive semi-definite
-// Hessian variant plus M/h^2 and I/h^2, solved by the O(N) block Cholesky, with a backtracking
-// line search on Phi. New velocities are (x - x^n)/h and theta/h.
+// is bounded). Newton iterations on the increments (dx, dtheta) use the exact Hessian plus M/h^2
+// and I/h^2 (quadratic convergence), or its positive semi-definite variant for an iteration where
+// that sum is not positive definite, solved by the O(N) block Cholesky, with a backtracking line
+// search on Phi. The contact response always uses the definite variant (bounded by M/h^2: the
+// exact matrix may be near singular and answer an impulse with a huge motion). New velocities
+// are (x - x^n)/h and theta/h.
 //
 // Dissipation, linear in the step's velocities with directions taken at the step's start (so it
 // is quadratic in the unknowns and never adds energy): internal friction along each chord's
@@ -85,8 +88,10 @@ class ImplicitEuler {
   // when Newton did not converge. predicted: node impulses expected from contacts over the step
   // (the last step's), applied as forces p / h so that the step starts near its result with
   // contacts; respond() takes the total impulses and applies only the difference.
+  // predicted_torques: the same for torque impulses on the segments (world, one per segment).
   ImplicitResult step(Rod& rod, double t, double h, const Vec3& gravity,
-                      const std::vector<Vec3>* predicted = nullptr);
+                      const std::vector<Vec3>* predicted = nullptr,
+                      const std::vector<Vec3>* predicted_torques = nullptr);
   // BDF2 (true) or backward Euler (false, the default) from the next step on.
   void set_second_order(bool on) { bdf2_ = on; }
   bool second_order() const { return bdf2_; }
@@ -102,7 +107,7 @@ class ImplicitEuler {
   // coupling of A. Kinematic and constrained items respond only where they are free. Calling it
   // again replaces the previous response. torque_impulses: optionally also torque impulses on the
   // segments (N m s, world, one per segment; contact friction's moment), applied as torques
-  // T / b held over the step as the step applies loads (not predicted: taken whole).
+  // T / b held over the step as the step applies loads (less the predicted ones).
   void respond(Rod& rod, const std::vector<Vec3>& impulses,
                const std::vector<Vec3>* torque_impulses = nullptr);
   // The node velocity changes that respond() would add for these impulses, without changing the
@@ -111,7 +116,7 @@ class ImplicitEuler {
                 const std::vector<Vec3>* torque_impulses = nullptr);
   // The last step's effective step b (s).
   double effective_step() const { return beta_; }
-  bool has_prediction() const { return !predicted_.empty(); }
+  bool has_prediction() const { return !predicted_.empty() || !predicted_torques_.empty(); }
   // The state at the start of the last step.
   const std::vector<Vec3>& start_positions() const { return x0_; }
   const std::vector<Vec3>& start_velocities() const { return v0_; }
@@ -176,12 +181,14 @@ class ImplicitEuler {
   bool friction_t_ = false, friction_r_ = false, drag_on_ = false;
   // Loads held over the step (world): forces on nodes, torques on segments.
   std::vector<std::pair<int, Vec3>> forces_, torques_;
-  std::vector<Vec3> predicted_;  // node impulses the step included (empty: none)
+  std::vector<Vec3> predicted_;          // node impulses the step included (empty: none)
+  std::vector<Vec3> predicted_torques_;  // and segment torque impulses (empty: none)
   BlockTridiag a_;
   BlockTridiagSolver solver_;
   bool factored_ = false;  // solver_ holds a factorisation usable for this step
   // The state solver_ was factorised at, to decide whether it can be kept (reuse_factor).
   bool have_factor_ = false;
+  bool factor_definite_ = false;  // solver_ holds the definite variant (the contact response's)
   double factor_beta_ = 0.0;
   std::vector<Vec3> factor_x_;
   std::vector<Quat> factor_q_;

@@ -82,7 +82,8 @@ struct RodSystem {
   double t = 0.0;           // time at which the loads are evaluated
   double load_scale = 1.0;  // factor on the loads (continuation)
   unsigned terms = kAllTerms;
-  // false: the exact Hessian. true: a positive semi-definite variant for implicit steps, which
+  // false: the exact Hessian. true: a positive semi-definite variant (the implicit step's contact
+  // response, and its Newton iterations where the exact one is not definite), which
   // keeps only the parts that cannot turn negative: Gauss-Newton for the coupling and bending
   // (J^T K J of their residuals t - d3 and u - uhat) and the stretch's geometric stiffness only
   // under tension. It equals the exact Hessian at the rest state. The exact one is indefinite

@@ -97,7 +97,7 @@ void ContactSystem::solve(World& world, double h) {
       else
         drive_position(d, t_end, &v[d.node]);
     }
-    if (!world.contact.surface_friction) continue;
+    if (!world.contact.surface_friction && !(world.contact.rolling_friction > 0.0)) continue;
     // And each segment's world angular velocity after the torques' kick (the integrator's
     // gyroscopic or torque-free part is left out: it changes it at second order in h).
     const int ns = rod.num_segments();
@@ -140,7 +140,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     Rod& rod = rods[r];
     const int nn = rod.num_nodes();
     velocity_[r] = rod.velocities();
-    if (world.contact.surface_friction) take_angular_velocities(rod, r);
+    if (world.contact.surface_friction || world.contact.rolling_friction > 0.0)
+      take_angular_velocities(rod, r);
     auto& w = inv_mass_[r];
     w.resize(nn);
     for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
@@ -176,8 +177,9 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   impulse_.resize(nr);
   change_v_.resize(nr);
   torque_.resize(nr);
-  const bool levers = !levers_.empty();  // torque impulses too (surface friction)
-  auto gather = [&](auto&& impulse_of) {
+  // Torque impulses too (surface friction's levers, rolling resistance).
+  const bool levers = !levers_.empty() || spin_;
+  auto gather = [&](auto&& impulse_of, auto&& roll_of) {
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) {
         impulse_[r].assign(rods[r].num_nodes(), Vec3::Zero());
@@ -187,6 +189,11 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       const Contact& c = contacts_[k];
       const Vec3 p = impulse_of(k);
       if (levers) gather_torques(k, p);
+      if (c.roll > 0.0) {
+        const Vec3 pr = roll_of(k);
+        torque_[c.rod_a][c.seg_a] += pr;
+        if (c.rod_b >= 0) torque_[c.rod_b][c.seg_b] -= pr;
+      }
       impulse_[c.rod_a][c.seg_a] += (1.0 - c.s_a) * p;
       impulse_[c.rod_a][c.seg_a + 1] += c.s_a * p;
       if (c.rod_b >= 0) {
@@ -196,7 +203,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     }
   };
   auto respond_all = [&] {
-    gather([&](size_t k) { return Vec3(contacts_[k].pn * contacts_[k].normal + contacts_[k].pt); });
+    gather([&](size_t k) { return Vec3(contacts_[k].pn * contacts_[k].normal + contacts_[k].pt); },
+           [&](size_t k) { return contacts_[k].pr; });
     for (int r = 0; r < nr; ++r) {
       if (!touched_[r]) continue;
       steppers[r].respond(rods[r], impulse_[r], levers ? &torque_[r] : nullptr);
@@ -225,7 +233,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
     if (round > 0 && violation() <= cs.implicit_tolerance) break;
     ++stats_.rounds;
-    for (size_t k = 0; k < nc; ++k) old_[k] = {0, contacts_[k].pn, contacts_[k].pt};
+    for (size_t k = 0; k < nc; ++k)
+      old_[k] = {0, contacts_[k].pn, contacts_[k].pt, contacts_[k].pr};
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) held_v_[r] = velocity_[r];  // the true velocities
     sweep(cs, h, cs.implicit_sweeps);
@@ -234,6 +243,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       const Contact& c = contacts_[k];
       change =
           std::max(change, (c.pn * c.normal + c.pt - old_[k].pn * c.normal - old_[k].pt).norm());
+      // Rolling resistance's change on the scale of the normal impulse (its bound is roll x pn).
+      if (c.roll > 0.0) change = std::max(change, (c.pr - old_[k].pr).norm() / c.roll);
       largest = std::max(largest, c.pn);
     }
     if (change <= 1e-6 * largest) {
@@ -241,10 +252,12 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
         if (touched_[r]) velocity_[r] = held_v_[r];
       break;
     }
-    gather([&](size_t k) {
-      const Contact& c = contacts_[k];
-      return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
-    });
+    gather(
+        [&](size_t k) {
+          const Contact& c = contacts_[k];
+          return Vec3((c.pn - old_[k].pn) * c.normal + c.pt - old_[k].pt);
+        },
+        [&](size_t k) { return Vec3(contacts_[k].pr - old_[k].pr); });
     for (int r = 0; r < nr; ++r)
       if (touched_[r])
         steppers[r].response(rods[r], impulse_[r], &change_v_[r], levers ? &torque_[r] : nullptr);
@@ -275,16 +288,25 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       const double limit = c.mu * c.pn, norm = pt.norm();
       if (norm > limit) pt *= limit / norm;
       c.pt = pt;
+      if (c.roll > 0.0) {  // as swept (the scale fits the normal rows), within the new bound
+        const double rl = c.roll * c.pn, rn = c.pr.norm();
+        if (rn > rl) c.pr *= rl / rn;
+      }
     }
     respond_all();
   }
   // Remembered per rod, as the next step's prediction.
   last_impulse_.resize(nr);
+  last_torque_.resize(nr);
   for (int r = 0; r < nr; ++r) {
     if (touched_[r])
       last_impulse_[r] = impulse_[r];
     else
       last_impulse_[r].clear();
+    if (touched_[r] && levers)
+      last_torque_[r] = torque_[r];
+    else
+      last_torque_[r].clear();
   }
   finish(world, h, false);
 }
@@ -300,6 +322,8 @@ void ContactSystem::prepare_sweeps(const World& world) {
   scratch_inv_w_.resize(contacts_.size());
   levers_.clear();
   contact_levers_.resize(contacts_.size());
+  spin_ = world.contact.surface_friction || world.contact.rolling_friction > 0.0;
+  if (world.contact.rolling_friction > 0.0) rolls_.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
     const auto& wa = inv_mass_[c.rod_a];
@@ -313,7 +337,50 @@ void ContactSystem::prepare_sweeps(const World& world) {
     contact_levers_[k].count = 0;
     if (w > 0.0 && (c.lever_a > 0.0 || c.lever_b > 0.0)) prepare_levers(world, k);
     if (w > 0.0) apply_impulse(k, c.pn * c.normal + c.pt);
+    if (c.roll > 0.0) {
+      prepare_roll(world, k);
+      if (rolls_[k].active) apply_roll(k, c.pr);
+    }
   }
+}
+
+void ContactSystem::prepare_roll(const World& world, size_t k) {
+  const Contact& c = contacts_[k];
+  RollRow& rr = rolls_[k];
+  rr.wa = segment_inverse_inertia(world.rods()[c.rod_a], c.seg_a);
+  rr.wb = c.rod_b >= 0 ? segment_inverse_inertia(world.rods()[c.rod_b], c.seg_b) : Mat3::Zero();
+  rr.t1 = any_perpendicular(c.normal);
+  rr.t2 = c.normal.cross(rr.t1);
+  const Mat3 w = rr.wa + rr.wb;
+  Eigen::Matrix2d kr;
+  kr << rr.t1.dot(w * rr.t1), rr.t1.dot(w * rr.t2), rr.t2.dot(w * rr.t1), rr.t2.dot(w * rr.t2);
+  const double tr = kr.trace();
+  rr.active = tr > 0.0;
+  // A segment held to turn about one axis leaves the block singular: a small regularisation
+  // answers only along the directions it can turn.
+  if (rr.active) rr.inv_k = (kr + 1e-9 * tr * Eigen::Matrix2d::Identity()).inverse();
+}
+
+void ContactSystem::apply_roll(size_t k, const Vec3& dt) {
+  const Contact& c = contacts_[k];
+  const RollRow& rr = rolls_[k];
+  omega_[c.rod_a][c.seg_a] += rr.wa * dt;
+  if (c.rod_b >= 0) omega_[c.rod_b][c.seg_b] -= rr.wb * dt;
+}
+
+void ContactSystem::sweep_roll(size_t k) {
+  Contact& c = contacts_[k];
+  const RollRow& rr = rolls_[k];
+  if (!rr.active) return;
+  const Vec3 wr =
+      omega_[c.rod_a][c.seg_a] - (c.rod_b >= 0 ? omega_[c.rod_b][c.seg_b] : c.surface_spin);
+  // The torque that stops the relative rolling, projected onto the disc of radius roll x pn.
+  const Eigen::Vector2d d = rr.inv_k * Eigen::Vector2d(rr.t1.dot(wr), rr.t2.dot(wr));
+  Vec3 pr = c.pr - d.x() * rr.t1 - d.y() * rr.t2;
+  const double limit = c.roll * c.pn, norm2 = pr.squaredNorm();
+  if (norm2 > limit * limit) pr *= limit / std::sqrt(norm2);
+  apply_roll(k, pr - c.pr);
+  c.pr = pr;
 }
 
 // The segments that turn with contact k's point, and the pair's tangential inverse mass with their
@@ -434,6 +501,7 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
       dp += pt - c.pt;
       c.pt = pt;
       apply_impulse(k, dp);
+      if (c.roll > 0.0) sweep_roll(k);
       change2 = std::max(change2, dp.squaredNorm());
       largest = std::max(largest, c.pn);
     }
@@ -451,7 +519,7 @@ void ContactSystem::finish(World& world, double h, bool add_forces) {
     const Contact& c = contacts_[k];
     if (c.pn <= 0.0) continue;
     ++stats_.active;
-    previous_.push_back({pair_key(c), c.pn, c.pt});
+    previous_.push_back({pair_key(c), c.pn, c.pt, c.pr});
     if (!add_forces) continue;
     const Vec3 f = (c.pn * c.normal + c.pt) / h;
     rods[c.rod_a].add_step_force(c.seg_a, (1.0 - c.s_a) * f);
@@ -465,6 +533,10 @@ void ContactSystem::finish(World& world, double h, bool add_forces) {
     const Vec3 nf = c.normal.cross(f);
     for (int i = cl.first; i < cl.first + cl.count; ++i)
       rods[levers_[i].rod].add_step_torque(levers_[i].seg, levers_[i].c * nf);
+    if (c.roll > 0.0) {  // rolling resistance's couple
+      rods[c.rod_a].add_step_torque(c.seg_a, c.pr / h);
+      if (c.rod_b >= 0) rods[c.rod_b].add_step_torque(c.seg_b, -c.pr / h);
+    }
   }
   std::sort(previous_.begin(), previous_.end(),
             [](const Previous& a, const Previous& b) { return a.key < b.key; });
@@ -474,6 +546,7 @@ void ContactSystem::warm_start() {
   for (Contact& c : contacts_) {
     c.pn = 0.0;
     c.pt.setZero();
+    c.pr.setZero();
     const std::uint64_t key = pair_key(c);
     auto it = std::lower_bound(previous_.begin(), previous_.end(), key,
                                [](const Previous& p, std::uint64_t k) { return p.key < k; });
@@ -483,6 +556,12 @@ void ContactSystem::warm_start() {
     const double limit = c.mu * c.pn, norm = pt.norm();
     if (norm > limit) pt *= limit / norm;
     c.pt = pt;
+    if (c.roll > 0.0) {
+      Vec3 pr = it->pr - c.normal * c.normal.dot(it->pr);
+      const double rl = c.roll * c.pn, rn = pr.norm();
+      if (rn > rl) pr *= rl / rn;
+      c.pr = pr;
+    }
   }
 }
 
@@ -529,6 +608,8 @@ void ContactSystem::detect(World& world, double h) {
           const Obstacle& ob = obs.obstacle(which_[k]);
           c.mu = ob.friction;
           c.surface_velocity = ob.velocity_at(f.on_obstacle);
+          c.surface_spin = ob.angular_velocity;
+          c.roll = cs.rolling_friction * radius;
           contacts_.push_back(c);
         }
       }
@@ -637,6 +718,7 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     const double mb =
         rod_b.contact_options().friction >= 0.0 ? rod_b.contact_options().friction : cs.friction;
     c.mu = std::sqrt(ma * mb);
+    c.roll = cs.rolling_friction * 2.0 * ra_ * rb_ / (ra_ + rb_);
     contacts_.push_back(c);
   }
 }

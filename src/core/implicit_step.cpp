@@ -325,7 +325,8 @@ bool ImplicitEuler::history_usable(const Rod& rod, double h) const {
 }
 
 ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
-                                   const std::vector<Vec3>* predicted) {
+                                   const std::vector<Vec3>* predicted,
+                                   const std::vector<Vec3>* predicted_torques) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
   auto& x = rod.positions();
   auto& q = rod.orientations();
@@ -413,9 +414,14 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     for (int i = 0; i < nn; ++i)
       if (!predicted_[i].isZero()) forces_.push_back({i, predicted_[i] / h});
   }
+  predicted_torques_.clear();
+  if (predicted_torques && static_cast<int>(predicted_torques->size()) == ns) {
+    predicted_torques_ = *predicted_torques;
+    for (int s = 0; s < ns; ++s)
+      if (!predicted_torques_[s].isZero()) torques_.push_back({s, predicted_torques_[s] / h});
+  }
 
   RodSystem sys{&rod, gravity, t1};
-  sys.definite = true;
   sys.terms = kAllTerms & ~kLoadTerm;  // loads: setup_loads, held over the step
   double lc = 0.0, ref = 0.0;
   for (double l : rod.rest_lengths()) lc += l / ns;
@@ -478,9 +484,17 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     }
     const bool kept = chord_ok_ && factor_reusable(rod);
     ++res.iterations;
-    if (!kept && !refactor(rod, sys, h)) {  // cannot fail with the definite variant
-      factored_ = false;
-      break;
+    // The exact Hessian converges quadratically; where it is not positive definite (frames sheared
+    // against their chords, a compressed chord) the definite variant stands in for this iteration.
+    if (!kept) {
+      sys.definite = false;
+      if (!refactor(rod, sys, h)) {
+        sys.definite = true;
+        if (!refactor(rod, sys, h)) {  // cannot fail with the definite variant
+          factored_ = false;
+          break;
+        }
+      }
     }
     factored_ = true;
     last_kept = kept;
@@ -583,10 +597,11 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
 }
 
 bool ImplicitEuler::ensure_factor(const Rod& rod) {
-  if (factored_) return true;
+  // The contact response needs the definite variant: the exact Hessian may be near singular.
+  if (factored_ && factor_definite_) return true;
   // Converged without a Newton iteration: the kept factorisation if it still stands for the
   // matrix at the result, else one at the result.
-  if (factor_reusable(rod)) return factored_ = true;
+  if (factor_definite_ && factor_reusable(rod)) return factored_ = true;
   RodSystem sys{&rod, Vec3::Zero(), 0.0};
   sys.definite = true;
   sys.terms = kStretchTerm | kCouplingTerm | kBendTwistTerm;
@@ -598,6 +613,7 @@ bool ImplicitEuler::refactor(const Rod& rod, const RodSystem& sys, double h) {
   assemble(rod, sys, h);
   ++factorisations_;
   have_factor_ = solver_.factor(a_);
+  factor_definite_ = sys.definite;
   factor_beta_ = h;
   factor_x_ = rod.positions();
   factor_q_ = rod.orientations();
@@ -664,11 +680,12 @@ void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses,
     for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
   // A torque T / h held over the step enters as the loads' torques do (gradient()): in the frame
   // of the rotation over the step, mapped to the increment at the step's result.
-  if (torque_impulses)
-    for (int s = 0; s + 1 < nn; ++s)
-      if (!(*torque_impulses)[s].isZero())
-        z_.segment<3>(6 * s + 3) +=
-            inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * (*torque_impulses)[s]) / h;
+  for (int s = 0; s + 1 < nn; ++s) {
+    Vec3 t = torque_impulses ? (*torque_impulses)[s] : Vec3::Zero();
+    if (!predicted_torques_.empty()) t -= predicted_torques_[s];
+    if (!t.isZero())
+      z_.segment<3>(6 * s + 3) += inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * t) / h;
+  }
   project_gradient(&z_);
   solver_.solve(&z_);
   project_gradient(&z_);

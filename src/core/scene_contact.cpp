@@ -268,6 +268,10 @@ void read_contact_settings(const Value& v, ContactSettings* s) {
   }
   if (auto p = m.find("max_push_speed")) s->max_push_speed = p->non_negative();
   if (auto p = m.find("surface_friction")) s->surface_friction = p->boolean();
+  if (auto p = m.find("rolling_friction")) {
+    s->rolling_friction = p->non_negative();
+    if (s->rolling_friction > 1.0) p->fail("must be <= 1");
+  }
   m.finish();
 }
 

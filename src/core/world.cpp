@@ -52,9 +52,11 @@ void World::step_implicit() {
     implicit_[r].set_options(implicit);
     implicit_[r].set_second_order(integrator == Integrator::kBdf2);
     // Contacts' impulses of the last step as the prediction (they change little between steps).
-    const std::vector<Vec3>* predicted =
-        contacts && contacts_ ? contacts_->last_impulses(static_cast<int>(r)) : nullptr;
-    const ImplicitResult res = implicit_[r].step(rods_[r], time_, time_step, gravity, predicted);
+    const int ri = static_cast<int>(r);
+    const bool have = contacts && contacts_;
+    const ImplicitResult res = implicit_[r].step(
+        rods_[r], time_, time_step, gravity, have ? contacts_->last_impulses(ri) : nullptr,
+        have ? contacts_->last_torque_impulses(ri) : nullptr);
     implicit_stats_.iterations = std::max(implicit_stats_.iterations, res.iterations);
     if (!res.converged) ++implicit_stats_.unconverged;
     if (res.reference > 0.0)

@@ -24,7 +24,7 @@ Scene spinning_rope(double r, double mu, double w0, bool implicit) {
                 "gravity: [0, 0, -9.81]\ntime_step: %s\n"
                 "integrator: %s\n"
                 "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: %.17g}\n"
-                "contact: {surface_friction: true}\n"
+                "contact: {surface_friction: true, rolling_friction: 0}\n"
                 "rods:\n  - name: rope\n    elements: 20\n    radius: %.17g\n"
                 "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
                 "    shape: {type: straight, start: [0, 0, %.17g], direction: [1, 0, 0], "
