@@ -61,7 +61,7 @@ struct ContactSettings {
   // spinning about its own axis on a floor (twist unwinding through a lying end) and, with
   // surface friction, a rope rolling on it. Spin about the normal is left to the sliding friction
   // of neighbouring contacts.
-  double rolling_friction = 0.05;
+  double rolling_friction = 0.0;
 };
 
 struct Contact {

@@ -62,6 +62,11 @@ struct ImplicitOptions {
   // momentum and weight scale sum_i m_i (|g| + |v_i| / h), or reaches the round-off floor of
   // the forces (stiff stretch and penalty set it).
   double tolerance = 1e-8;
+  // ... or below this fraction of the predicted contact forces (their sum of magnitudes, torques /
+  // mean segment length), the accuracy to which the contact solve resolves its impulses (it stops
+  // once no impulse changes by more than 1e-6 of the largest): a rod resting on contacts whose
+  // impulses drift at that level would otherwise take a Newton iteration at every step.
+  double prediction_tolerance = 1e-6;
   // Reuse of the factorised Newton matrix (a chord iteration): it is kept from an earlier
   // iteration or step while no element's direction and no segment's orientation has turned by
   // more than this angle (rad) since it was factorised, and the step size and the supports are

@@ -438,7 +438,13 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
                        (sec.stretch + sec.kappa + (sec.bend + sec.twist) / (lc * lc));
   ImplicitResult res;
   res.reference = ref;
-  const double tolerance = std::max(opt_.tolerance * ref, floor);
+  // The predicted contact forces are known only as well as the contact solve resolves them: a
+  // residual below that share of them is the contact solve's noise, not the step's error.
+  double predicted_scale = 0.0;
+  for (const Vec3& p : predicted_) predicted_scale += p.norm() / h;
+  for (const Vec3& t : predicted_torques_) predicted_scale += t.norm() / (h * lc);
+  const double tolerance =
+      std::max({opt_.tolerance * ref, floor, opt_.prediction_tolerance * predicted_scale});
   // Loads whose size overflows (a force of 1e200 N: |F|^2 is infinite) would make the tolerance
   // infinite and the step "converge" without moving: no step can meet them.
   const bool finite_loads = std::isfinite(ref);
