@@ -296,14 +296,16 @@ void StepGuard::add_step_work(const World& world, double h) {
       for (size_t k = 0; k < et.size(); ++k) w += et[k].norm() * om[k].norm() * h;
     }
   }
-  // Contacts: a moving obstacle's surface works on the rod, and the push-out that removes a
-  // penetration separates the surfaces faster than they met.
+  // Contacts: a moving obstacle's surface works on the rod (its rolling resistance too, if it
+  // turns), and the push-out that removes a penetration separates the surfaces faster than they
+  // met.
   if (const ContactSystem* c = world.contacts()) {
     const ContactSettings& cs = world.contact;
     for (const Contact& k : c->contacts()) {
       if (k.pn == 0.0 && k.pt.isZero()) continue;
       const double push = std::min(cs.max_push_speed, cs.push_out * std::max(0.0, -k.gap) / h);
       w += (k.pn * k.normal + k.pt).norm() * (k.surface_velocity.norm() + push);
+      w += k.pr.norm() * k.surface_spin.norm();  // rolling resistance on a turning obstacle
     }
   }
   work_ += w;
