@@ -13,9 +13,10 @@
 // is bounded). Newton iterations on the increments (dx, dtheta) use the exact Hessian plus M/h^2
 // and I/h^2 (quadratic convergence), or its positive semi-definite variant for an iteration where
 // that sum is not positive definite, solved by the O(N) block Cholesky, with a backtracking line
-// search on Phi. The contact response always uses the definite variant (bounded by M/h^2: the
-// exact matrix may be near singular and answer an impulse with a huge motion). New velocities
-// are (x - x^n)/h and theta/h.
+// search on Phi. The contact response uses the last iteration's factorisation while its answer z
+// to the impulses' loads b keeps z^T M z / h^2 <= 2 b . z (a definite matrix, A >= M/h^2, keeps
+// it within b . z), else the definite variant at the step's result: the exact matrix may be near
+// singular and answer an impulse with a huge motion. New velocities are (x - x^n)/h and theta/h.
 //
 // Dissipation, linear in the step's velocities with directions taken at the step's start (so it
 // is quadratic in the unknowns and never adds energy): internal friction along each chord's
@@ -139,7 +140,14 @@ class ImplicitEuler {
   void assemble(const Rod& rod, const RodSystem& sys, double h);
   void project_gradient(Eigen::VectorXd* g) const;
   void record_reactions(Rod& rod);
-  bool ensure_factor(const Rod& rod);
+  // A factorisation for the contact response at the step's result (exact_ok: the last Newton
+  // iteration's, even if it was the exact Hessian's).
+  bool ensure_factor(const Rod& rod, bool exact_ok = false);
+  // The response z_ to the impulses: on the last factorisation if its answer is bounded
+  // (response_bounded), else on the definite variant's.
+  bool solve_response(const Rod& rod, const std::vector<Vec3>& impulses,
+                      const std::vector<Vec3>* torque_impulses);
+  bool response_bounded(const Rod& rod) const;
   // Assembles and factorises at the rod's state (false: not positive definite).
   bool refactor(const Rod& rod, const RodSystem& sys, double h);
   // Whether the kept factorisation may stand for the matrix at the rod's state now.
@@ -202,7 +210,7 @@ class ImplicitEuler {
   std::vector<double> factor_params_, params_;  // the rod's parameters then and now (scratch)
   long factorisations_ = 0;
   bool chord_ok_ = true;  // Newton may iterate on a kept factorisation (off after one failed)
-  Eigen::VectorXd g_, g_trial_, d_, z_;
+  Eigen::VectorXd g_, g_trial_, d_, z_, rhs_;
   Eigen::VectorXd g_raw_, g_raw_trial_;  // g_ and g_trial_ before the supports' projection
   // The step's result without contacts (for respond()).
   std::vector<Vec3> x_free_, v_free_, w_free_;

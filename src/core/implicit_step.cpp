@@ -602,9 +602,8 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   return res;
 }
 
-bool ImplicitEuler::ensure_factor(const Rod& rod) {
-  // The contact response needs the definite variant: the exact Hessian may be near singular.
-  if (factored_ && factor_definite_) return true;
+bool ImplicitEuler::ensure_factor(const Rod& rod, bool exact_ok) {
+  if (factored_ && (factor_definite_ || exact_ok)) return true;
   // Converged without a Newton iteration: the kept factorisation if it still stands for the
   // matrix at the result, else one at the result.
   if (factor_definite_ && factor_reusable(rod)) return factored_ = true;
@@ -693,8 +692,34 @@ void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses,
       z_.segment<3>(6 * s + 3) += inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * t) / h;
   }
   project_gradient(&z_);
+  rhs_ = z_;
   solver_.solve(&z_);
   project_gradient(&z_);
+}
+
+bool ImplicitEuler::response_bounded(const Rod& rod) const {
+  // With A >= M/h^2 (the definite variant) z^T M z / h^2 <= z^T A z = b . z. The exact matrix may
+  // have a direction where it is far below that (near singular): a response along it would be
+  // huge. Twice the bound is allowed (the exact one is the better linearisation elsewhere).
+  const int nn = rod.num_nodes(), ns = rod.num_segments();
+  double kinetic = 0.0;
+  for (int i = 0; i < nn; ++i) kinetic += rod.node_masses()[i] * z_.segment<3>(6 * i).squaredNorm();
+  for (int s = 0; s < ns; ++s)
+    kinetic +=
+        z_.segment<3>(6 * s + 3).dot(rod.segment_inertia(s).cwiseProduct(z_.segment<3>(6 * s + 3)));
+  return std::isfinite(kinetic) && kinetic / (beta_ * beta_) <= 2.0 * rhs_.dot(z_);
+}
+
+bool ImplicitEuler::solve_response(const Rod& rod, const std::vector<Vec3>& impulses,
+                                   const std::vector<Vec3>* torque_impulses) {
+  // The factorisation of the last Newton iteration, exact or definite, when it answers within the
+  // bound; else the definite variant at the step's result.
+  if (!ensure_factor(rod, true)) return false;
+  solve_impulses(impulses, torque_impulses);
+  if (factor_definite_ || response_bounded(rod)) return true;
+  if (!ensure_factor(rod, false)) return false;
+  solve_impulses(impulses, torque_impulses);
+  return true;
 }
 
 void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
@@ -702,8 +727,7 @@ void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
   const int nn = rod.num_nodes();
   const double h = beta_;
   dv->assign(nn, Vec3::Zero());
-  if (!ensure_factor(rod)) return;
-  solve_impulses(impulses, torque_impulses);
+  if (!solve_response(rod, impulses, torque_impulses)) return;
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
@@ -719,8 +743,7 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses,
   q = q_free_;
   v = v_free_;
   w = w_free_;
-  if (ensure_factor(rod)) {
-    solve_impulses(impulses, torque_impulses);
+  if (solve_response(rod, impulses, torque_impulses)) {
     for (int i = 0; i < nn; ++i) {
       if (kind_[2 * i] == 1) continue;
       x[i] += z_.segment<3>(6 * i);

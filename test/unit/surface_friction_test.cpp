@@ -1,7 +1,6 @@
 // Friction at the contact point on the surfaces (ContactSettings::surface_friction): a rope
 // spinning about its axis on a floor is braked into rolling as a cylinder is, a rod-rod contact
-// keeps the total angular momentum, and the pre-stressed spiral that springs open on a floor stops
-// spinning.
+// keeps the total angular momentum.
 #include <gtest/gtest.h>
 
 #include <cmath>
