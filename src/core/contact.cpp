@@ -37,6 +37,19 @@ Vec3 any_perpendicular(const Vec3& v) {
   return v.cross(a).normalized();
 }
 
+// The block t^T k t of a 3x3 matrix in the tangent plane spanned by t1, t2.
+Eigen::Matrix2d tangent_block(const Mat3& k, const Vec3& t1, const Vec3& t2) {
+  Eigen::Matrix2d b;
+  b << t1.dot(k * t1), t1.dot(k * t2), t2.dot(k * t1), t2.dot(k * t2);
+  return b;
+}
+
+// Whether the sweeps track the segments' angular velocities (friction's moments, rolling
+// resistance's couples).
+bool tracks_spin(const ContactSettings& cs) {
+  return cs.surface_friction || cs.rolling_friction > 0.0;
+}
+
 Mat3 cross_matrix(const Vec3& v) {
   Mat3 m;
   m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
@@ -78,6 +91,7 @@ void ContactSystem::solve(World& world, double h) {
   inv_mass_.resize(nr);
   omega_.resize(nr);
   const double t_end = world.time() + h;
+  spin_ = tracks_spin(world.contact);
   // The velocities each node would have after the step without contacts (drives: theirs).
   for (int r = 0; r < nr; ++r) {
     Rod& rod = rods[r];
@@ -97,7 +111,7 @@ void ContactSystem::solve(World& world, double h) {
       else
         drive_position(d, t_end, &v[d.node]);
     }
-    if (!world.contact.surface_friction && !(world.contact.rolling_friction > 0.0)) continue;
+    if (!spin_) continue;
     // And each segment's world angular velocity after the torques' kick (the integrator's
     // gyroscopic or torque-free part is left out: it changes it at second order in h).
     const int ns = rod.num_segments();
@@ -133,6 +147,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   velocity_.resize(nr);
   inv_mass_.resize(nr);
   omega_.resize(nr);
+  spin_ = tracks_spin(world.contact);
   // Each rod's velocities after its step without contacts; detection at the step's start.
   held_x_.resize(nr);
   held_v_.resize(nr);
@@ -140,8 +155,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     Rod& rod = rods[r];
     const int nn = rod.num_nodes();
     velocity_[r] = rod.velocities();
-    if (world.contact.surface_friction || world.contact.rolling_friction > 0.0)
-      take_angular_velocities(rod, r);
+    if (spin_) take_angular_velocities(rod, r);
     auto& w = inv_mass_[r];
     w.resize(nn);
     for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
@@ -177,18 +191,17 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   impulse_.resize(nr);
   change_v_.resize(nr);
   torque_.resize(nr);
-  // Torque impulses too (surface friction's levers, rolling resistance).
-  const bool levers = !levers_.empty() || spin_;
+  // With spin_, torque impulses too (surface friction's levers, rolling resistance).
   auto gather = [&](auto&& impulse_of, auto&& roll_of) {
     for (int r = 0; r < nr; ++r)
       if (touched_[r]) {
         impulse_[r].assign(rods[r].num_nodes(), Vec3::Zero());
-        if (levers) torque_[r].assign(rods[r].num_segments(), Vec3::Zero());
+        if (spin_) torque_[r].assign(rods[r].num_segments(), Vec3::Zero());
       }
     for (size_t k = 0; k < nc; ++k) {
       const Contact& c = contacts_[k];
       const Vec3 p = impulse_of(k);
-      if (levers) gather_torques(k, p);
+      if (spin_) gather_torques(k, p);
       if (c.roll > 0.0) {
         const Vec3 pr = roll_of(k);
         torque_[c.rod_a][c.seg_a] += pr;
@@ -207,9 +220,9 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
            [&](size_t k) { return contacts_[k].pr; });
     for (int r = 0; r < nr; ++r) {
       if (!touched_[r]) continue;
-      steppers[r].respond(rods[r], impulse_[r], levers ? &torque_[r] : nullptr);
+      steppers[r].respond(rods[r], impulse_[r], spin_ ? &torque_[r] : nullptr);
       velocity_[r] = rods[r].velocities();
-      if (levers) take_angular_velocities(rods[r], r);
+      if (spin_) take_angular_velocities(rods[r], r);
     }
   };
   respond_all();
@@ -260,7 +273,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
         [&](size_t k) { return Vec3(contacts_[k].pr - old_[k].pr); });
     for (int r = 0; r < nr; ++r)
       if (touched_[r])
-        steppers[r].response(rods[r], impulse_[r], &change_v_[r], levers ? &torque_[r] : nullptr);
+        steppers[r].response(rods[r], impulse_[r], &change_v_[r], spin_ ? &torque_[r] : nullptr);
     auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
       return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
     };
@@ -303,7 +316,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       last_impulse_[r] = impulse_[r];
     else
       last_impulse_[r].clear();
-    if (touched_[r] && levers)
+    if (touched_[r] && spin_)
       last_torque_[r] = torque_[r];
     else
       last_torque_[r].clear();
@@ -322,7 +335,6 @@ void ContactSystem::prepare_sweeps(const World& world) {
   scratch_inv_w_.resize(contacts_.size());
   levers_.clear();
   contact_levers_.resize(contacts_.size());
-  spin_ = world.contact.surface_friction || world.contact.rolling_friction > 0.0;
   if (world.contact.rolling_friction > 0.0) rolls_.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
@@ -351,9 +363,7 @@ void ContactSystem::prepare_roll(const World& world, size_t k) {
   rr.wb = c.rod_b >= 0 ? segment_inverse_inertia(world.rods()[c.rod_b], c.seg_b) : Mat3::Zero();
   rr.t1 = any_perpendicular(c.normal);
   rr.t2 = c.normal.cross(rr.t1);
-  const Mat3 w = rr.wa + rr.wb;
-  Eigen::Matrix2d kr;
-  kr << rr.t1.dot(w * rr.t1), rr.t1.dot(w * rr.t2), rr.t2.dot(w * rr.t1), rr.t2.dot(w * rr.t2);
+  const Eigen::Matrix2d kr = tangent_block(rr.wa + rr.wb, rr.t1, rr.t2);
   const double tr = kr.trace();
   rr.active = tr > 0.0;
   // A segment held to turn about one axis leaves the block singular: a small regularisation
@@ -412,9 +422,7 @@ void ContactSystem::prepare_levers(const World& world, size_t k) {
   }
   cl.t1 = any_perpendicular(c.normal);
   cl.t2 = c.normal.cross(cl.t1);
-  Eigen::Matrix2d kt;
-  kt << cl.t1.dot(k3 * cl.t1), cl.t1.dot(k3 * cl.t2), cl.t2.dot(k3 * cl.t1), cl.t2.dot(k3 * cl.t2);
-  cl.inv_k = kt.inverse();  // kt >= w I, w > 0
+  cl.inv_k = tangent_block(k3, cl.t1, cl.t2).inverse();  // >= w I, w > 0
 }
 
 Vec3 ContactSystem::lever_velocity(size_t k) const {

@@ -10,38 +10,21 @@
 
 #include "corde_sim/scene.h"
 #include "corde_sim/world.h"
+#include "friction_util.h"
 
 namespace corde {
 namespace {
 
-// A straight 0.5 m rope of radius r along x lying on a floor (friction 0.5), every segment
-// spinning at w0 about its own axis and the nodes moving sideways at vy.
+using friction::rope_motion;
+
+// The lying rope of friction_util.h on a floor with friction 0.5, rolling resistance `rolling`,
+// friction at the surfaces or at the axes.
 Scene rope_on_floor(double r, double rolling, bool surface, const char* integrator,
                     const char* step, double w0, double vy) {
-  char buf[900];
-  std::snprintf(buf, sizeof buf,
-                "gravity: [0, 0, -9.81]\ntime_step: %s\n"
-                "integrator: %s\n"
-                "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: 0.5}\n"
-                "contact: {surface_friction: %s, rolling_friction: %.17g}\n"
-                "rods:\n  - name: rope\n    elements: 20\n    radius: %.17g\n"
-                "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                "    shape: {type: straight, start: [0, 0, %.17g], direction: [1, 0, 0], "
-                "length: 0.5}\n",
-                step, integrator, surface ? "true" : "false", rolling, r, r);
-  Scene s = parse_scene(buf);
-  for (Vec3& w : s.world.rods()[0].angular_velocities()) w = Vec3(0.0, 0.0, w0);
-  for (Vec3& v : s.world.rods()[0].velocities()) v = Vec3(0.0, vy, 0.0);
-  return s;
-}
-
-// Mean sideways node velocity (y) and mean spin about the axis (world x) of the rope.
-void rope_motion(const Rod& rod, double* vy, double* spin) {
-  *vy = 0.0;
-  *spin = 0.0;
-  for (const Vec3& v : rod.velocities()) *vy += v.y() / rod.num_nodes();
-  for (int s = 0; s < rod.num_segments(); ++s)
-    *spin += (rod.orientations()[s] * rod.angular_velocities()[s]).x() / rod.num_segments();
+  char contact[96];
+  std::snprintf(contact, sizeof contact, "{surface_friction: %s, rolling_friction: %.17g}",
+                surface ? "true" : "false", rolling);
+  return friction::lying_rope(r, 0.5, contact, integrator, step, w0, vy);
 }
 
 // Runs until `until` s; returns the time (interpolated between steps) at which f() first falls
@@ -128,43 +111,21 @@ TEST(RollingFriction, RollingRopeDeceleratesAsACylinder) {
 // with friction at the surfaces: rolling resistance acts as a couple (pr on one segment, -pr on
 // the other), so the total angular momentum is kept to round-off while it changes the spins.
 TEST(RollingFriction, RodRodCoupleKeepsAngularMomentum) {
-  const double r = 0.005;
   double spin_change[2] = {0.0, 0.0};
   for (double mu_r : {0.0, 0.5}) {
-    char buf[1200];
-    std::snprintf(buf, sizeof buf,
-                  "gravity: [0, 0, 0]\ntime_step: 2.0e-5\n"
-                  "contact: {friction: 0.5, surface_friction: true, rolling_friction: %.17g}\n"
-                  "rods:\n"
-                  "  - name: a\n    elements: 10\n    radius: %.17g\n"
-                  "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                  "    contact: {rods: true}\n"
-                  "    shape: {type: straight, start: [-0.1, 0.013, 0], direction: [1, 0, 0], "
-                  "length: 0.2}\n"
-                  "  - name: b\n    elements: 10\n    radius: %.17g\n"
-                  "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                  "    contact: {rods: true}\n"
-                  "    shape: {type: straight, start: [0.011, -0.1, %.17g], direction: [0, 1, 0], "
-                  "length: 0.2}\n",
-                  mu_r, r, r, 2.0 * r + 1e-5);
-    Scene s = parse_scene(buf);
+    char contact[96];
+    std::snprintf(contact, sizeof contact,
+                  "{friction: 0.5, surface_friction: true, rolling_friction: %.17g}", mu_r);
+    Scene s = friction::crossing_rods(contact);
     World& world = s.world;
-    Rod& a = world.rods()[0];
-    Rod& b = world.rods()[1];
-    for (Vec3& v : b.velocities()) v = Vec3(0.3, 0.05, -0.2);
-    for (Vec3& w : a.angular_velocities()) w = Vec3(0.0, 0.0, 40.0);
-    for (Vec3& w : b.angular_velocities()) w = Vec3(0.0, 0.0, -25.0);
-    auto momentum = [&] { return Vec3(a.angular_momentum() + b.angular_momentum()); };
-    double scale = 0.0;
-    for (const Rod* rod : {&a, &b})
-      for (int i = 0; i < rod->num_nodes(); ++i)
-        scale += rod->node_masses()[i] * rod->positions()[i].norm() * 0.4;
+    const Rod& a = world.rods()[0];
+    const double scale = friction::angular_momentum_scale(world);
     double worst = 0.0, couple = 0.0;
     const double spin0 = a.angular_velocities()[5].z();
     for (int k = 0; k < 200; ++k) {
-      const Vec3 before = momentum();
+      const Vec3 before = friction::angular_momentum(world);
       world.step();
-      worst = std::max(worst, (momentum() - before).norm());
+      worst = std::max(worst, (friction::angular_momentum(world) - before).norm());
       for (const Contact& c : world.contacts()->contacts()) couple += c.pr.norm();
     }
     EXPECT_LT(worst, 1e-12 * scale) << "mu_r " << mu_r;

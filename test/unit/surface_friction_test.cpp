@@ -9,39 +9,19 @@
 
 #include "corde_sim/scene.h"
 #include "corde_sim/world.h"
+#include "friction_util.h"
 
 namespace corde {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using friction::rope_motion;
 
-// A straight 0.5 m rope of radius r along x lying on a floor (mu), every segment spinning at w0
-// about its own axis (d3), the nodes at rest.
+// The lying rope of friction_util.h on a floor with friction mu, friction at the surfaces, no
+// rolling resistance, spinning at w0 with its nodes at rest.
 Scene spinning_rope(double r, double mu, double w0, bool implicit) {
-  char buf[800];
-  std::snprintf(buf, sizeof buf,
-                "gravity: [0, 0, -9.81]\ntime_step: %s\n"
-                "integrator: %s\n"
-                "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: %.17g}\n"
-                "contact: {surface_friction: true, rolling_friction: 0}\n"
-                "rods:\n  - name: rope\n    elements: 20\n    radius: %.17g\n"
-                "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                "    shape: {type: straight, start: [0, 0, %.17g], direction: [1, 0, 0], "
-                "length: 0.5}\n",
-                implicit ? "2.0e-4" : "auto", implicit ? "implicit_euler" : "split_rotation", mu, r,
-                r);
-  Scene s = parse_scene(buf);
-  for (Vec3& w : s.world.rods()[0].angular_velocities()) w = Vec3(0.0, 0.0, w0);
-  return s;
-}
-
-// Mean sideways node velocity (y) and mean spin about the axis (world x) of the rope.
-void rope_motion(const Rod& rod, double* vy, double* spin) {
-  *vy = 0.0;
-  *spin = 0.0;
-  for (const Vec3& v : rod.velocities()) *vy += v.y() / rod.num_nodes();
-  for (int s = 0; s < rod.num_segments(); ++s)
-    *spin += (rod.orientations()[s] * rod.angular_velocities()[s]).x() / rod.num_segments();
+  return friction::lying_rope(r, mu, "{surface_friction: true, rolling_friction: 0}",
+                              implicit ? "implicit_euler" : "split_rotation",
+                              implicit ? "2.0e-4" : "auto", w0, 0.0);
 }
 
 // A cylinder of radius r spinning at w0 about its axis on a plane with friction mu slides until
@@ -87,45 +67,19 @@ TEST(SurfaceFriction, SpinningRopeOnFloorTurnsIntoRolling) {
 // tangential impulse) would change it.
 TEST(SurfaceFriction, RodRodContactKeepsAngularMomentum) {
   for (bool surface : {true, false}) {
-    const double r = 0.005;
-    char buf[1200];
-    std::snprintf(buf, sizeof buf,
-                  "gravity: [0, 0, 0]\ntime_step: 2.0e-5\n"
-                  "contact: {friction: 0.5, surface_friction: %s}\n"
-                  "rods:\n"
-                  "  - name: a\n    elements: 10\n    radius: %.17g\n"
-                  "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                  "    contact: {rods: true}\n"
-                  "    shape: {type: straight, start: [-0.1, 0.013, 0], direction: [1, 0, 0], "
-                  "length: 0.2}\n"
-                  "  - name: b\n    elements: 10\n    radius: %.17g\n"
-                  "    material: {E: 1.0e6, nu: 0.5, rho: 1000, damping_time: 1.0e-3}\n"
-                  "    contact: {rods: true}\n"
-                  "    shape: {type: straight, start: [0.011, -0.1, %.17g], direction: [0, 1, 0], "
-                  "length: 0.2}\n",
-                  surface ? "true" : "false", r, r, 2.0 * r + 1e-5);
-    Scene s = parse_scene(buf);
+    Scene s = friction::crossing_rods(surface ? "{friction: 0.5, surface_friction: true}"
+                                              : "{friction: 0.5, surface_friction: false}");
     World& world = s.world;
-    Rod& a = world.rods()[0];
-    Rod& b = world.rods()[1];
-    // b comes down on a and slides along it; both spin about their axes.
-    for (Vec3& v : b.velocities()) v = Vec3(0.3, 0.05, -0.2);
-    for (Vec3& w : a.angular_velocities()) w = Vec3(0.0, 0.0, 40.0);
-    for (Vec3& w : b.angular_velocities()) w = Vec3(0.0, 0.0, -25.0);
-    auto momentum = [&] { return Vec3(a.angular_momentum() + b.angular_momentum()); };
-    // The scale of the terms summed: round-off is relative to it.
-    double scale = 0.0;
-    for (const Rod* rod : {&a, &b})
-      for (int i = 0; i < rod->num_nodes(); ++i)
-        scale += rod->node_masses()[i] * rod->positions()[i].norm() * 0.4;
-    double worst = 0.0, friction = 0.0, spin_a0 = a.angular_velocities()[5].z();
+    const Rod& a = world.rods()[0];
+    const double scale = friction::angular_momentum_scale(world);
+    double worst = 0.0, tangential = 0.0, spin_a0 = a.angular_velocities()[5].z();
     for (int k = 0; k < 200; ++k) {
-      const Vec3 before = momentum();
+      const Vec3 before = friction::angular_momentum(world);
       world.step();
-      worst = std::max(worst, (momentum() - before).norm());
-      for (const Contact& c : world.contacts()->contacts()) friction += c.pt.norm();
+      worst = std::max(worst, (friction::angular_momentum(world) - before).norm());
+      for (const Contact& c : world.contacts()->contacts()) tangential += c.pt.norm();
     }
-    ASSERT_GT(friction, 0.0);
+    ASSERT_GT(tangential, 0.0);
     if (surface) {
       EXPECT_LT(worst, 1e-12 * scale);
       EXPECT_GT(std::abs(a.angular_velocities()[5].z() - spin_a0), 0.1);
