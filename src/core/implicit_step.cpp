@@ -9,9 +9,19 @@ namespace corde {
 
 namespace {
 
+// Small rotations (most steps turn a segment by well under 0.2 rad) by their Taylor series,
+// which are exact to round-off there and several times cheaper than the library's sin, cos and
+// atan2 that run for every segment in every Newton iteration.
 Quat exp_body(const Vec3& theta) {
-  const double a = theta.norm();
-  if (a < 1e-300) return Quat::Identity();
+  const double a2 = theta.squaredNorm();
+  if (a2 < 0.04) {  // |theta| < 0.2: cos(x) and sin(x)/x of the half angle x, to x^8
+    const double x2 = 0.25 * a2;
+    const double c = 1.0 + x2 * (-1.0 / 2 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 / 40320)));
+    const double sx = 1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 / 362880)));
+    const Vec3 v = (0.5 * sx) * theta;
+    return Quat(c, v.x(), v.y(), v.z());
+  }
+  const double a = std::sqrt(a2);
   return Quat(Eigen::AngleAxisd(a, theta / a));
 }
 
@@ -19,17 +29,32 @@ Quat exp_body(const Vec3& theta) {
 Vec3 log_body(const Quat& r) {
   const double s = r.w() < 0.0 ? -1.0 : 1.0;
   const Vec3 v = s * r.vec();
-  const double n = v.norm();
+  const double n2 = v.squaredNorm(), w = s * r.w();
+  if (n2 < 0.01 * w * w) {  // t = n / w < 0.1: 2 atan(t) / n = (2 / w) atan(t) / t, to t^12
+    const double t2 = n2 / (w * w);
+    const double f =
+        1.0 + t2 * (-1.0 / 3 +
+                    t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 / 13)))));
+    return (2.0 * f / w) * v;
+  }
+  const double n = std::sqrt(n2);
   if (n < 1e-300) return Vec3::Zero();
-  return (2.0 * std::atan2(n, s * r.w()) / n) * v;
+  return (2.0 * std::atan2(n, w) / n) * v;
+}
+
+// (1/a^2 - (1 + cos a) / (2 a sin a)) for a = |theta|; below 0.3 its series (to a^8), which also
+// avoids the formula's cancellation at small a.
+double inv_jacobian_coefficient(const Vec3& theta) {
+  const double a2 = theta.squaredNorm();
+  if (a2 < 0.09)
+    return 1.0 / 12 + a2 * (1.0 / 720 + a2 * (1.0 / 30240 + a2 * (1.0 / 1209600 + a2 / 47900160)));
+  const double a = std::sqrt(a2);
+  return 1.0 / a2 - (1.0 + std::cos(a)) / (2.0 * a * std::sin(a));
 }
 
 // J_r^-1(theta)^T y: the gradient of f(log(exp(theta) exp(delta))) at delta = 0 when y = df/dtheta.
 Vec3 inv_right_jacobian_t(const Vec3& theta, const Vec3& y) {
-  const double a = theta.norm();
-  // (1/a^2 - (1 + cos a) / (2 a sin a)), 1/12 + a^2/720 near zero.
-  const double c = a < 1e-4 ? 1.0 / 12.0 + a * a / 720.0
-                            : 1.0 / (a * a) - (1.0 + std::cos(a)) / (2.0 * a * std::sin(a));
+  const double c = inv_jacobian_coefficient(theta);
   return y - 0.5 * theta.cross(y) + c * theta.cross(theta.cross(y));
 }
 
