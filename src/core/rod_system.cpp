@@ -387,7 +387,8 @@ void RodSystem::hessian(BlockTridiag* h) const {
       h->add(segment_index(0), segment_index(0), hbb);
     }
     if (g1.active) {
-      bend_twist_hessian(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, &haa, nullptr, nullptr);
+      bend_twist_hessian(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, &haa, nullptr, nullptr,
+                         definite);
       h->add(segment_index(n - 1), segment_index(n - 1), haa);
     }
   }
