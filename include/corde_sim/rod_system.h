@@ -59,7 +59,7 @@ class BlockTridiagSolver {
   void solve(Eigen::VectorXd* b) const;
 
  private:
-  std::vector<Mat6> l_inv_;    // inverse of the Cholesky factor of each pivot block (lower)
+  std::vector<Mat6> l_inv_t_;  // L_kk^-T, the transposed inverse of each pivot block's factor
   std::vector<Mat6> l_lower_;  // L(k + 1, k)
   int blocks_ = 0;
 };

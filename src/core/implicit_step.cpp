@@ -73,13 +73,16 @@ Mat3 right_jacobian(const Vec3& theta) {
 // columns multiplied by p, the complement (I - p) on the diagonal, so that the solution's
 // component lies in p's range and the matrix stays positive definite.
 void project_block(BlockTridiag* a, int u, const Mat3& p) {
-  const int k = u / 2, o = 3 * (u % 2);
-  Mat6 pf = Mat6::Identity();
-  pf.block<3, 3>(o, o) = p;
-  a->diag[k] = pf * a->diag[k] * pf;
-  a->diag[k].block<3, 3>(o, o) += Mat3::Identity() - p;
-  if (k < static_cast<int>(a->lower.size())) a->lower[k] = a->lower[k] * pf;
-  if (k > 0) a->lower[k - 1] = pf * a->lower[k - 1];
+  // Only the 3x3 blocks in u's rows and columns change (o: u's offset in block k, v: the other
+  // item's); the products assign through temporaries, so aliasing is safe.
+  const int k = u / 2, o = 3 * (u % 2), v = 3 - o;
+  Mat6& d = a->diag[k];
+  d.block<3, 3>(o, o) = p * d.block<3, 3>(o, o) * p + (Mat3::Identity() - p);
+  d.block<3, 3>(o, v) = p * d.block<3, 3>(o, v);
+  d.block<3, 3>(v, o) = d.block<3, 3>(v, o) * p;
+  if (k < static_cast<int>(a->lower.size()))
+    a->lower[k].middleCols<3>(o) = a->lower[k].middleCols<3>(o) * p;
+  if (k > 0) a->lower[k - 1].middleRows<3>(o) = p * a->lower[k - 1].middleRows<3>(o);
 }
 
 }  // namespace
@@ -284,13 +287,15 @@ void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
     a_.diag[i].topLeftCorner<3, 3>().diagonal().array() += inv_h2 * rod.node_masses()[i];
   for (int s = 0; s < ns; ++s)
     a_.diag[s].bottomRightCorner<3, 3>().diagonal() += inv_h2 * rod.segment_inertia(s);
+  // Written straight into the 6x6 blocks (rod_system.h): node s at offset 0 of block s, segment
+  // s at offset 3, lower[s] the block (s + 1, s).
   if (friction_t_) {
     const double gt = rod.section().gamma_t;
     for (int s = 0; s < ns; ++s) {
       const Mat3 m = (inv_h * gt / rod.rest_lengths()[s]) * (tangent_[s] * tangent_[s].transpose());
-      a_.add(RodSystem::node_index(s), RodSystem::node_index(s), m);
-      a_.add(RodSystem::node_index(s + 1), RodSystem::node_index(s + 1), m);
-      a_.add(RodSystem::node_index(s + 1), RodSystem::node_index(s), -m);
+      a_.diag[s].topLeftCorner<3, 3>() += m;
+      a_.diag[s + 1].topLeftCorner<3, 3>() += m;
+      a_.lower[s].topLeftCorner<3, 3>() -= m;
     }
   }
   if (friction_r_) {
@@ -298,15 +303,13 @@ void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
     const auto& rest = rod.rest_lengths();
     for (int j = 0; j + 1 < ns; ++j) {
       const double c = inv_h * gr / (0.5 * (rest[j] + rest[j + 1]));
-      const int a = RodSystem::segment_index(j), b = RodSystem::segment_index(j + 1);
-      a_.add(a, a, c * (rot0_[j].transpose() * rot0_[j]));
-      a_.add(b, b, c * (rot0_[j + 1].transpose() * rot0_[j + 1]));
-      a_.add(b, a, -c * (rot0_[j + 1].transpose() * rot0_[j]));
+      a_.diag[j].bottomRightCorner<3, 3>() += c * (rot0_[j].transpose() * rot0_[j]);
+      a_.diag[j + 1].bottomRightCorner<3, 3>() += c * (rot0_[j + 1].transpose() * rot0_[j + 1]);
+      a_.lower[j].bottomRightCorner<3, 3>() -= c * (rot0_[j + 1].transpose() * rot0_[j]);
     }
   }
   if (drag_on_)
-    for (int i = 0; i < nn; ++i)
-      a_.add(RodSystem::node_index(i), RodSystem::node_index(i), inv_h * drag_[i]);
+    for (int i = 0; i < nn; ++i) a_.diag[i].topLeftCorner<3, 3>() += inv_h * drag_[i];
   for (int u = 0; u < static_cast<int>(kind_.size()); ++u) {
     if (kind_[u] == 1)
       for (int c = 0; c < 3; ++c) a_.fix(3 * u + c);

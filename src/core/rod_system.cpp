@@ -112,62 +112,57 @@ Eigen::SparseMatrix<double> BlockTridiag::sparse() const {
 
 namespace {
 
-// Cholesky of the 6x6 s (lower triangle read) into l (lower triangle written) and the inverse of
-// its diagonal; false when a pivot l_jj^2 is <= min_pivot (or NaN). Plain loops of fixed trip
-// count, which the compiler unrolls: several times faster than a general LLT at this size.
+// Cholesky of the 6x6 s (lower triangle read) into l (lower triangle written; the strict upper
+// triangle gets finite values of no meaning) and the inverse of its diagonal; false when a pivot
+// l_jj^2 is <= min_pivot (or NaN). Left-looking, a whole column at a time: column operations
+// vectorise where element-wise loops would not.
 bool cholesky6(const Mat6& s, double min_pivot, Mat6* l, Vec6* inv_diag) {
   for (int j = 0; j < 6; ++j) {
-    double d = s(j, j);
-    for (int k = 0; k < j; ++k) d -= (*l)(j, k) * (*l)(j, k);
-    if (!(d > min_pivot)) return false;
-    const double ljj = std::sqrt(d), inv = 1.0 / ljj;
-    (*l)(j, j) = ljj;
+    Vec6 col = s.col(j);
+    for (int k = 0; k < j; ++k) col -= (*l)(j, k) * l->col(k);
+    if (!(col(j) > min_pivot)) return false;
+    const double inv = 1.0 / std::sqrt(col(j));
     (*inv_diag)(j) = inv;
-    for (int i = j + 1; i < 6; ++i) {
-      double v = s(i, j);
-      for (int k = 0; k < j; ++k) v -= (*l)(i, k) * (*l)(j, k);
-      (*l)(i, j) = v * inv;
-    }
+    l->col(j) = inv * col;
   }
   return true;
+}
+
+// x = b L^-T for the factor l of cholesky6 (column j of x solves x L^T = b for that column by
+// substitution), accumulated a whole column at a time for the same reason.
+void right_solve_lt(const Mat6& l, const Vec6& inv_diag, const Mat6& b, Mat6* x) {
+  for (int j = 0; j < 6; ++j) {
+    Vec6 col = b.col(j);
+    for (int m = 0; m < j; ++m) col -= l(j, m) * x->col(m);
+    x->col(j) = inv_diag(j) * col;
+  }
 }
 
 }  // namespace
 
 bool BlockTridiagSolver::factor(const BlockTridiag& a, double min_pivot) {
   const int n = a.blocks();
-  if (static_cast<int>(l_inv_.size()) < n) {
-    l_inv_.resize(n);
+  if (static_cast<int>(l_inv_t_.size()) < n) {
+    l_inv_t_.resize(n);
     l_lower_.resize(n);
   }
   Mat6 s, l;
   Vec6 inv;
   for (int k = 0; k < n; ++k) {
     s = a.diag[k];
-    if (k > 0) s.noalias() -= l_lower_[k - 1] * l_lower_[k - 1].transpose();
-    if (!cholesky6(s, min_pivot, &l, &inv)) return false;
-    // L^-1 by forward substitution on the identity, a row at a time (the six columns of a row are
-    // independent, so the substitution does not wait on itself): the solves then multiply by it
-    // (a product the compiler vectorises) instead of substituting element by element.
-    Mat6& li = l_inv_[k];
-    li.setZero();
-    for (int j = 0; j < 6; ++j)
-      for (int c = 0; c < 6; ++c) {
-        double v = j == c ? 1.0 : 0.0;
-        for (int m = 0; m < j; ++m) v -= l(j, m) * li(m, c);
-        li(j, c) = v * inv(j);
-      }
-    if (k + 1 < n) {
-      // C = A_{k+1,k} L^-T: each row c solves L c^T = a^T by forward substitution.
-      Mat6& c = l_lower_[k];
-      const Mat6& ak = a.lower[k];
-      for (int r = 0; r < 6; ++r)
-        for (int j = 0; j < 6; ++j) {
-          double v = ak(r, j);
-          for (int m = 0; m < j; ++m) v -= c(r, m) * l(j, m);
-          c(r, j) = v * inv(j);
-        }
+    if (k > 0) {
+      // S -= C C^T on the lower triangle only (all cholesky6 reads), in column pairs: a third
+      // fewer products than the full block.
+      const Mat6& c = l_lower_[k - 1];
+      s.block<6, 2>(0, 0).noalias() -= c * c.topRows<2>().transpose();
+      s.block<4, 2>(2, 2).noalias() -= c.middleRows<4>(2) * c.middleRows<2>(2).transpose();
+      s.block<2, 2>(4, 4).noalias() -= c.bottomRows<2>() * c.bottomRows<2>().transpose();
     }
+    if (!cholesky6(s, min_pivot, &l, &inv)) return false;
+    // Keeps L^-T (column j of it is row j of L^-1) so that the solves multiply by it, which
+    // vectorises, instead of substituting element by element; and C = A_{k+1,k} L^-T.
+    right_solve_lt(l, inv, Mat6::Identity(), &l_inv_t_[k]);
+    if (k + 1 < n) right_solve_lt(l, inv, a.lower[k], &l_lower_[k]);
   }
   blocks_ = n;
   return true;
@@ -179,12 +174,12 @@ void BlockTridiagSolver::solve(Eigen::VectorXd* b) const {
   for (int k = 0; k < n; ++k) {
     y = b->segment<6>(6 * k);
     if (k > 0) y.noalias() -= l_lower_[k - 1] * b->segment<6>(6 * k - 6);
-    b->segment<6>(6 * k).noalias() = l_inv_[k] * y;
+    b->segment<6>(6 * k).noalias() = l_inv_t_[k].transpose() * y;
   }
   for (int k = n - 1; k >= 0; --k) {
     y = b->segment<6>(6 * k);
     if (k + 1 < n) y.noalias() -= l_lower_[k].transpose() * b->segment<6>(6 * k + 6);
-    b->segment<6>(6 * k).noalias() = l_inv_[k].transpose() * y;
+    b->segment<6>(6 * k).noalias() = l_inv_t_[k] * y;
   }
 }
 
@@ -218,7 +213,13 @@ void coupling_hessian(const Vec3& d, const Quat& q, double rest, double kappa, M
       *hdd = (c / (len * len)) *
              (d3 * t.transpose() + t * d3.transpose() + td * (Mat3::Identity() - 3.0 * tt));
   }
-  if (hdt) *hdt = (c / len) * (Mat3::Identity() - tt) * skew(d3) * r;
+  if (hdt) {
+    // (c/|d|) P [d3]x R with P = I - t t^T; [d3]x R = (d3 x d1, d3 x d2, 0) = (d2, -d1, 0).
+    const Vec3 d1 = r.col(0), d2 = r.col(1);
+    hdt->col(0) = (c / len) * (d2 - t.dot(d2) * t);
+    hdt->col(1) = (c / len) * (t.dot(d1) * t - d1);
+    hdt->col(2).setZero();
+  }
   if (htt && definite) {  // Gauss-Newton: c (I - e_z e_z^T)
     *htt = c * Mat3::Identity();
     (*htt)(2, 2) = 0.0;
@@ -237,19 +238,34 @@ void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k
   // -(|alpha|^2 + |beta|^2) v/8 - (1/4) vec((0, alpha) r0 (0, beta)), contracted with e = dV/du
   // gives the rest.
   const BendParts p = bend_parts(a, b, rest, k, uhat);
-  const double g = p.sigma / rest;
+  const double g = p.sigma / rest, w = p.w;
+  // With S = [v]x (S^T = -S), K = diag(l k), Ja = g (S - w I) and Jb = g (S + w I), the three
+  // Gauss-Newton blocks J^T K J expand into one product P = S K S and Q = K S:
+  // Ja^T K Ja = g^2 (w^2 K - P - w (Q + Q^T)), Jb^T K Jb = g^2 (w^2 K - P + w (Q + Q^T)),
+  // Ja^T K Jb = g^2 (w (Q^T - Q) - P - w^2 K).
   const Mat3 sv = skew(p.v);
-  const Mat3 ja = g * (sv - p.w * Mat3::Identity());
-  const Mat3 jb = g * (sv + p.w * Mat3::Identity());
   const Vec3 lk = rest * k;
+  const Mat3 q = lk.asDiagonal() * sv;
+  const Mat3 pp = sv * q;
+  const Mat3 kw2 = Mat3(lk.asDiagonal()) * (w * w);
+  const Mat3 qs = w * (q + q.transpose());
+  const double g2 = g * g;
   const double ev = p.e.dot(p.v);
-  const Mat3 diag_part = (definite ? 0.0 : -0.5 * g * ev) * Mat3::Identity();
-  if (haa) *haa = ja.transpose() * lk.asDiagonal() * ja + diag_part;
-  if (hbb) *hbb = jb.transpose() * lk.asDiagonal() * jb + diag_part;
-  if (hab)
-    *hab = ja.transpose() * lk.asDiagonal() * jb +
-           (definite ? 0.0 : 0.5 * g) * (p.v * p.e.transpose() + p.e * p.v.transpose() +
-                                         p.w * skew(p.e) - ev * Mat3::Identity());
+  const double diag_part = definite ? 0.0 : -0.5 * g * ev;
+  if (haa) {
+    *haa = g2 * (kw2 - pp - qs);
+    haa->diagonal().array() += diag_part;
+  }
+  if (hbb) {
+    *hbb = g2 * (kw2 - pp + qs);
+    hbb->diagonal().array() += diag_part;
+  }
+  if (hab) {
+    *hab = g2 * (w * (q.transpose() - q) - pp - kw2);
+    if (!definite)
+      *hab += (0.5 * g) * (p.v * p.e.transpose() + p.e * p.v.transpose() + w * skew(p.e) -
+                           ev * Mat3::Identity());
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -352,45 +368,49 @@ void RodSystem::hessian(BlockTridiag* h) const {
   const int n = r.num_segments();
   const Vec3 k(sec.bend, sec.bend, sec.twist);
   h->resize(blocks());
-  h->set_zero();
-  Mat3 hdd, hdt, htt;
+  // Each 6x6 block is assigned once, in the pass over the segments: block s (node s at offset 0,
+  // segment s at offset 3) from the terms of chord s, of bending element s (segments s, s + 1)
+  // and what chord s - 1 and element s - 1 leave on it; lower[s] = block (s + 1, s) from chord s
+  // and element s alone. No zeroing and no read-modify-write of the blocks.
+  const bool stretch = terms & kStretchTerm, coupling = terms & kCouplingTerm,
+             bending = terms & kBendTwistTerm;
+  const GhostFrame &g0 = r.ghost_start(), &g1 = r.ghost_end();
+  Mat3 dd_prev = Mat3::Zero(), hbb_prev = Mat3::Zero();  // chord s - 1 on node s, element s - 1
+  if (bending && g0.active)  // the start clamp is the element before segment 0
+    bend_twist_hessian(g0.frame, q[0], 0.5 * rest[0], k, g0.uhat, nullptr, nullptr, &hbb_prev,
+                       definite);
   for (int s = 0; s < n; ++s) {
     const Vec3 d = x[s + 1] - x[s];
-    const int i0 = node_index(s), i1 = node_index(s + 1), ts = segment_index(s);
-    Mat3 dd = Mat3::Zero();
-    if (terms & kStretchTerm) dd += stretch_hessian(d, rest[s], sec.stretch, definite);
-    if (terms & kCouplingTerm) {
+    Mat3 dd = Mat3::Zero(), hdt = Mat3::Zero(), htt = Mat3::Zero(), hdd;
+    Mat3 haa = Mat3::Zero(), hab = Mat3::Zero(), hbb = Mat3::Zero();
+    if (stretch) dd = stretch_hessian(d, rest[s], sec.stretch, definite);
+    if (coupling) {
       coupling_hessian(d, q[s], rest[s], sec.kappa, &hdd, &hdt, &htt, definite);
       dd += hdd;
-      h->add(ts, ts, htt);
-      h->add(i1, ts, hdt);  // d = x_{s+1} - x_s
-      h->add(i0, ts, -hdt);
     }
-    h->add(i0, i0, dd);
-    h->add(i1, i1, dd);
-    h->add(i1, i0, -dd);
-  }
-  if (terms & kBendTwistTerm) {
-    Mat3 haa, hab, hbb;
-    for (int j = 0; j + 1 < n; ++j) {
-      bend_twist_hessian(q[j], q[j + 1], 0.5 * (rest[j] + rest[j + 1]), k, r.rest_strains()[j],
+    if (bending && s + 1 < n)
+      bend_twist_hessian(q[s], q[s + 1], 0.5 * (rest[s] + rest[s + 1]), k, r.rest_strains()[s],
                          &haa, &hab, &hbb, definite);
-      const int ta = segment_index(j), tb = segment_index(j + 1);
-      h->add(ta, ta, haa);
-      h->add(tb, tb, hbb);
-      h->add(tb, ta, hab.transpose());
-    }
-    const GhostFrame &g0 = r.ghost_start(), &g1 = r.ghost_end();
-    if (g0.active) {
-      bend_twist_hessian(g0.frame, q[0], 0.5 * rest[0], k, g0.uhat, nullptr, nullptr, &hbb,
+    else if (bending && g1.active)  // the end clamp is the element after the last segment
+      bend_twist_hessian(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, &haa, nullptr, nullptr,
                          definite);
-      h->add(segment_index(0), segment_index(0), hbb);
-    }
-    if (g1.active) {
-      bend_twist_hessian(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, &haa, nullptr, nullptr);
-      h->add(segment_index(n - 1), segment_index(n - 1), haa);
-    }
+    // d = x_{s+1} - x_s: the coupling's (node, segment) blocks are +hdt for node s + 1 and -hdt
+    // for node s.
+    Mat6& ds = h->diag[s];
+    ds.topLeftCorner<3, 3>() = dd_prev + dd;
+    ds.topRightCorner<3, 3>() = -hdt;
+    ds.bottomLeftCorner<3, 3>() = -hdt.transpose();
+    ds.bottomRightCorner<3, 3>() = htt + haa + hbb_prev;
+    Mat6& ls = h->lower[s];
+    ls.topLeftCorner<3, 3>() = -dd;
+    ls.topRightCorner<3, 3>() = hdt;
+    ls.bottomLeftCorner<3, 3>().setZero();
+    ls.bottomRightCorner<3, 3>() = hab.transpose();  // (segment s + 1, segment s)
+    dd_prev = dd;
+    hbb_prev = hbb;
   }
+  h->diag[n].setZero();  // the last node and the unused slot
+  h->diag[n].topLeftCorner<3, 3>() = dd_prev;
   // Gravity and dead force loads are linear in the positions; dead torques have a skew torque
   // Jacobian and no symmetric part: none of them adds to the Hessian.
 }

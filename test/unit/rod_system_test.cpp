@@ -320,6 +320,59 @@ TEST(RodSystem, DefiniteVariantIsPositiveSemiDefiniteAndExactAtRest) {
   EXPECT_LT((h.dense() - exact).norm(), 1e-12 * exact.norm());
 }
 
+// Both ghost clamps take the definite variant. A clamp's frame bent by 2 rad against its ghost
+// frame (past a quarter turn) makes the exact term indefinite: about x its curvature is
+// (k/l) cos(2 rad) < 0. The definite term is the Gauss-Newton J^T (l k) J alone, with
+// J = (sigma/l)([v]x -+ w I) the Jacobian of u on the rod's own segment (- at the end clamp,
+// where the segment is the element's first frame; + at the start clamp, where it is the second).
+TEST(RodSystem, DefiniteVariantAtBothGhostClamps) {
+  for (const bool at_end : {false, true}) {
+    Rod rod = random_rod();
+    const int n = rod.num_segments(), s = at_end ? n - 1 : 0;
+    const Quat bent = rod.orientations()[s] * exp_body(Vec3(2.0, 0.0, 0.0));
+    rod.ghost_start().active = !at_end;
+    rod.ghost_end().active = at_end;
+    (at_end ? rod.ghost_end() : rod.ghost_start()) = GhostFrame{true, bent, Vec3::Zero()};
+    RodSystem sys{&rod, Vec3::Zero(), 0.0, 1.0, kBendTwistTerm};
+    sys.definite = true;
+    BlockTridiag with, without;
+    sys.hessian(&with);
+    // The clamp's own contribution: the difference to the same rod without it.
+    Rod free_rod = rod;
+    free_rod.ghost_start().active = free_rod.ghost_end().active = false;
+    RodSystem free_sys = sys;
+    free_sys.rod = &free_rod;
+    free_sys.hessian(&without);
+    const Eigen::MatrixXd clamp = with.dense() - without.dense();
+    const int ts = RodSystem::segment_index(s);
+    // Hand-computed: element (a, b) = (q_s, ghost) at the end, (ghost, q_s) at the start.
+    const Quat a = at_end ? rod.orientations()[s] : bent, b = at_end ? bent : rod.orientations()[s];
+    const double w = a.coeffs().dot(b.coeffs()), sigma = w < 0.0 ? -1.0 : 1.0;
+    const Vec3 v = (a.conjugate() * b).vec();
+    const double l = 0.5 * rod.rest_lengths()[s];
+    Mat3 sv;
+    sv << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+    const Mat3 j = (sigma / l) * (sv + (at_end ? -w : w) * Mat3::Identity());
+    const Vec3 k(rod.section().bend, rod.section().bend, rod.section().twist);
+    const Mat3 expected = j.transpose() * (l * k).asDiagonal() * j;
+    EXPECT_LT((clamp.block<3, 3>(ts, ts) - expected).norm(), 1e-12 * expected.norm())
+        << (at_end ? "end" : "start") << " clamp";
+    Eigen::MatrixXd rest_of_it = clamp;
+    rest_of_it.block<3, 3>(ts, ts).setZero();
+    EXPECT_EQ(rest_of_it.norm(), 0.0);
+    // Positive semi-definite, where the exact clamp term is not.
+    const double lo =
+        Eigen::SelfAdjointEigenSolver<Mat3>(clamp.block<3, 3>(ts, ts)).eigenvalues()(0);
+    EXPECT_GT(lo, -1e-12 * expected.norm()) << (at_end ? "end" : "start") << " clamp";
+    sys.definite = free_sys.definite = false;
+    sys.hessian(&with);
+    free_sys.hessian(&without);
+    const Mat3 exact = (with.dense() - without.dense()).block<3, 3>(ts, ts);
+    EXPECT_LT(Eigen::SelfAdjointEigenSolver<Mat3>(exact).eigenvalues()(0), -0.1 * exact.norm())
+        << "the test state should make the exact clamp term indefinite";
+  }
+}
+
 // M/h^2 + H of a cable with its first node and segment fixed, as an implicit step solves it.
 BlockTridiag step_matrix(int elements, Rod* out = nullptr) {
   RodSpec spec;
