@@ -624,6 +624,9 @@ void SimNode::check_holders_and_strain() {
       }
     if (!nearest.empty() && grasps_.release(world_, nearest)) {
       end_script(nearest, "slipped");
+      // As a release by service: a rollback must not hold the segment again (grasps_ goes back
+      // with the world), the node having said that it slipped.
+      guard_.mark_good(world_);
       ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
                strain_warning_.c_str());
       refresh_layout();

@@ -171,7 +171,12 @@ def rot_z(a):
 
 
 def rotation_angle(r):
-    return math.acos(max(-1.0, min(1.0, (np.trace(r) - 1.0) / 2.0)))
+    """Angle (rad) of a rotation matrix, from its sine and cosine: acos of the trace alone
+    resolves nothing below sqrt(2 eps) = 1.5e-8 rad (a turn of one ulp of a quaternion reads as
+    0 or as 2.1e-8 rad, depending on the orientation's round-off)."""
+    s = 0.5 * math.sqrt((r[2, 1] - r[1, 2]) ** 2 + (r[0, 2] - r[2, 0]) ** 2 +
+                        (r[1, 0] - r[0, 1]) ** 2)
+    return math.atan2(s, (np.trace(r) - 1.0) / 2.0)
 
 
 def twist_about(r_now, r_ref, axis):

@@ -87,6 +87,54 @@ class ReactionStrain(unittest.TestCase):
         for s in self.sim.state.messages(since):
             self.assertTrue(ct.valid_state(s))
 
+    def held(self):
+        r = self.sim.service("list_grasps", ListGrasps)()
+        return dict(zip(r.names, r.held))
+
+    def test_3_a_slip_is_what_a_rollback_goes_back_to(self):
+        # Single-stepped: the slip comes at the end of one ~step, an absurd force on the rope at
+        # the start of the next, which blows up through every retry of the stability guard. The
+        # node stops at its last good state: the one after the slip, with the slipped holder
+        # still released (a rollback to before the slip would hold it again, the node having
+        # said that it slipped).
+        self.assertTrue(self.sim.reset().success)
+        self.sim.paused_state()
+        self.addCleanup(self.sim.reset)
+        self.addCleanup(self.sim.pause, False)
+        for name, s in [("bottom", 0.475), ("push", 0.225)]:
+            r = self.sim.grasp(name, arc_length=s)
+            self.assertTrue(r.success, r.message)
+        # 'push' only carries the force below, on a free segment whichever holder slips.
+        self.assertTrue(self.sim.release("push").success)
+        pose_pub = rospy.Publisher("/grasps/bottom/pose", PoseStamped, queue_size=10)
+        wrench_pub = rospy.Publisher("/grasps/push/wrench", WrenchStamped, queue_size=10)
+        self.assertTrue(ct.wait_connected(pose_pub) and ct.wait_connected(wrench_pub))
+        p, rot = ct.segment_pose(self.sim.fresh_state().rods[0], N - 1)
+        for _ in range(5):  # queued by the node for the next ~step
+            pose_pub.publish(ct.pose_msg(p + np.array([0, 0, -0.3]), rot))
+            time.sleep(0.1)
+        r = self.sim.step(2500)  # 0.5 s: the holder glides 0.3 m down, the rope stretches 60%
+        self.assertTrue(r.success, r.message)
+        before = self.held()
+        slipped = [g for g in ("top", "bottom") if not before[g]]
+        self.assertEqual(len(slipped), 1, "one holder should have slipped: %s" % before)
+        w = WrenchStamped()
+        w.header.frame_id = "world"
+        w.header.stamp = rospy.Time.now()
+        w.wrench.force.z = 1e200
+        for _ in range(5):
+            wrench_pub.publish(w)
+            time.sleep(0.1)
+        r = self.sim.step(200)
+        self.assertFalse(r.success, "the force should have stopped the simulation: " + r.message)
+        self.assertIn("stopped at the last good state", r.message)
+        after = self.held()
+        self.assertEqual(after, before,
+                         "grasp '%s' slipped, but the state the guard went back to holds it "
+                         "again" % slipped[0])
+        s = self.sim.fresh_state()
+        self.assertTrue(ct.valid_state(s))
+
 
 if __name__ == "__main__":
     rostest.rosrun("corde_sim", "reaction_strain", ReactionStrain)
