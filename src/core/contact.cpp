@@ -44,6 +44,16 @@ Eigen::Matrix2d tangent_block(const Mat3& k, const Vec3& t1, const Vec3& t2) {
   return b;
 }
 
+// v shortened to length `limit` where it is longer: the Coulomb disc of friction, rolling
+// resistance's disc.
+Vec3 within(const Vec3& v, double limit) {
+  const double n2 = v.squaredNorm();
+  return n2 > limit * limit ? Vec3(v * (limit / std::sqrt(n2))) : v;
+}
+
+// The part of v in the plane normal to the unit vector n.
+Vec3 tangential(const Vec3& v, const Vec3& n) { return v - n * n.dot(v); }
+
 // Whether the sweeps track the segments' angular velocities (friction's moments, rolling
 // resistance's couples).
 bool tracks_spin(const ContactSettings& cs) {
@@ -296,15 +306,9 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
       c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn));
-      Vec3 pt = old_[k].pt + alpha * (c.pt - old_[k].pt);
-      pt -= c.normal * c.normal.dot(pt);
-      const double limit = c.mu * c.pn, norm = pt.norm();
-      if (norm > limit) pt *= limit / norm;
-      c.pt = pt;
-      if (c.roll > 0.0) {  // as swept (the scale fits the normal rows), within the new bound
-        const double rl = c.roll * c.pn, rn = c.pr.norm();
-        if (rn > rl) c.pr *= rl / rn;
-      }
+      c.pt = within(tangential(old_[k].pt + alpha * (c.pt - old_[k].pt), c.normal), c.mu * c.pn);
+      // Rolling resistance as swept (the scale fits the normal rows), within the new bound.
+      if (c.roll > 0.0) c.pr = within(c.pr, c.roll * c.pn);
     }
     respond_all();
   }
@@ -386,9 +390,7 @@ void ContactSystem::sweep_roll(size_t k) {
       omega_[c.rod_a][c.seg_a] - (c.rod_b >= 0 ? omega_[c.rod_b][c.seg_b] : c.surface_spin);
   // The torque that stops the relative rolling, projected onto the disc of radius roll x pn.
   const Eigen::Vector2d d = rr.inv_k * Eigen::Vector2d(rr.t1.dot(wr), rr.t2.dot(wr));
-  Vec3 pr = c.pr - d.x() * rr.t1 - d.y() * rr.t2;
-  const double limit = c.roll * c.pn, norm2 = pr.squaredNorm();
-  if (norm2 > limit * limit) pr *= limit / std::sqrt(norm2);
+  const Vec3 pr = within(c.pr - d.x() * rr.t1 - d.y() * rr.t2, c.roll * c.pn);
   apply_roll(k, pr - c.pr);
   c.pr = pr;
 }
@@ -496,7 +498,7 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
       // levers an impulse P changes the relative velocity by w P (a scalar inverse mass); with
       // them the tangential block is 2x2, solved exactly (the normal impulse turns nothing).
       const Vec3 after = vr + w * dp;
-      const Vec3 vt = after - c.normal * after.dot(c.normal);
+      const Vec3 vt = tangential(after, c.normal);
       Vec3 pt;
       if (cl.count == 0) {
         pt = c.pt - vt * iw;
@@ -504,8 +506,7 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
         const Eigen::Vector2d d = cl.inv_k * Eigen::Vector2d(cl.t1.dot(vt), cl.t2.dot(vt));
         pt = c.pt - d.x() * cl.t1 - d.y() * cl.t2;
       }
-      const double limit = c.mu * c.pn, norm2 = pt.squaredNorm();
-      if (norm2 > limit * limit) pt *= limit / std::sqrt(norm2);
+      pt = within(pt, c.mu * c.pn);
       dp += pt - c.pt;
       c.pt = pt;
       apply_impulse(k, dp);
@@ -560,16 +561,8 @@ void ContactSystem::warm_start() {
                                [](const Previous& p, std::uint64_t k) { return p.key < k; });
     if (it == previous_.end() || it->key != key) continue;
     c.pn = it->pn;
-    Vec3 pt = it->pt - c.normal * c.normal.dot(it->pt);
-    const double limit = c.mu * c.pn, norm = pt.norm();
-    if (norm > limit) pt *= limit / norm;
-    c.pt = pt;
-    if (c.roll > 0.0) {
-      Vec3 pr = it->pr - c.normal * c.normal.dot(it->pr);
-      const double rl = c.roll * c.pn, rn = pr.norm();
-      if (rn > rl) pr *= rl / rn;
-      c.pr = pr;
-    }
+    c.pt = within(tangential(it->pt, c.normal), c.mu * c.pn);
+    if (c.roll > 0.0) c.pr = within(tangential(it->pr, c.normal), c.roll * c.pn);
   }
 }
 
