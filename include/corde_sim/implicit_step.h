@@ -116,8 +116,9 @@ class ImplicitEuler {
   // T / b held over the step as the step applies loads (less the predicted ones).
   void respond(Rod& rod, const std::vector<Vec3>& impulses,
                const std::vector<Vec3>* torque_impulses = nullptr);
-  // The node velocity changes that respond() would add for these impulses, without changing the
-  // rod (dv = A^-1 p / b^2).
+  // The node velocity changes that these impulses make, without changing the rod (dv = A^-1 p /
+  // b^2): for a change of the impulses, the difference of respond()'s velocities (which takes the
+  // prediction out of the totals; a change carries none of it).
   void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv,
                 const std::vector<Vec3>* torque_impulses = nullptr);
   // The last step's effective step b (s).
@@ -144,9 +145,10 @@ class ImplicitEuler {
   // iteration's, even if it was the exact Hessian's).
   bool ensure_factor(const Rod& rod, bool exact_ok = false);
   // The response z_ to the impulses: on the last factorisation if its answer is bounded
-  // (response_bounded), else on the definite variant's.
+  // (response_bounded), else on the definite variant's. totals: the impulses are totals, from
+  // which the predicted ones (already in the step) come out; else a change of them.
   bool solve_response(const Rod& rod, const std::vector<Vec3>& impulses,
-                      const std::vector<Vec3>* torque_impulses);
+                      const std::vector<Vec3>* torque_impulses, bool totals);
   bool response_bounded(const Rod& rod) const;
   // Assembles and factorises at the rod's state (false: not positive definite).
   bool refactor(const Rod& rod, const RodSystem& sys, double h);
@@ -156,8 +158,8 @@ class ImplicitEuler {
   // inertia, rest strains, the clamps' ghost frames; the velocities under quadratic drag),
   // flattened, to tell a configured rod from the one factorised.
   static void parameters(const Rod& rod, std::vector<double>* out);
-  void solve_impulses(const std::vector<Vec3>& impulses,
-                      const std::vector<Vec3>* torque_impulses);  // into z_
+  void solve_impulses(const std::vector<Vec3>& impulses, const std::vector<Vec3>* torque_impulses,
+                      bool totals);  // into z_
   bool history_usable(const Rod& rod, double h) const;
   void remember_end(const Rod& rod);
 

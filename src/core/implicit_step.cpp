@@ -704,18 +704,18 @@ bool ImplicitEuler::factor_reusable(const Rod& rod) {
 }
 
 void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses,
-                                   const std::vector<Vec3>* torque_impulses) {
+                                   const std::vector<Vec3>* torque_impulses, bool totals) {
   const double h = beta_;
   const int nn = static_cast<int>(kind_.size() / 2);
   z_.setZero(6 * nn);
   for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) = impulses[i] / h;
-  if (!predicted_.empty())
+  if (totals && !predicted_.empty())
     for (int i = 0; i < nn; ++i) z_.segment<3>(6 * i) -= predicted_[i] / h;
   // A torque T / h held over the step enters as the loads' torques do (gradient()): in the frame
   // of the rotation over the step, mapped to the increment at the step's result.
   for (int s = 0; s + 1 < nn; ++s) {
     Vec3 t = torque_impulses ? (*torque_impulses)[s] : Vec3::Zero();
-    if (!predicted_torques_.empty()) t -= predicted_torques_[s];
+    if (totals && !predicted_torques_.empty()) t -= predicted_torques_[s];
     if (!t.isZero())
       z_.segment<3>(6 * s + 3) += inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * t) / h;
   }
@@ -739,14 +739,14 @@ bool ImplicitEuler::response_bounded(const Rod& rod) const {
 }
 
 bool ImplicitEuler::solve_response(const Rod& rod, const std::vector<Vec3>& impulses,
-                                   const std::vector<Vec3>* torque_impulses) {
+                                   const std::vector<Vec3>* torque_impulses, bool totals) {
   // The factorisation of the last Newton iteration, exact or definite, when it answers within the
   // bound; else the definite variant at the step's result.
   if (!ensure_factor(rod, true)) return false;
-  solve_impulses(impulses, torque_impulses);
+  solve_impulses(impulses, torque_impulses, totals);
   if (factor_definite_ || response_bounded(rod)) return true;
   if (!ensure_factor(rod, false)) return false;
-  solve_impulses(impulses, torque_impulses);
+  solve_impulses(impulses, torque_impulses, totals);
   return true;
 }
 
@@ -755,7 +755,7 @@ void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
   const int nn = rod.num_nodes();
   const double h = beta_;
   dv->assign(nn, Vec3::Zero());
-  if (!solve_response(rod, impulses, torque_impulses)) return;
+  if (!solve_response(rod, impulses, torque_impulses, false)) return;
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
@@ -771,7 +771,7 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses,
   q = q_free_;
   v = v_free_;
   w = w_free_;
-  if (solve_response(rod, impulses, torque_impulses)) {
+  if (solve_response(rod, impulses, torque_impulses, true)) {
     for (int i = 0; i < nn; ++i) {
       if (kind_[2 * i] == 1) continue;
       x[i] += z_.segment<3>(6 * i);
