@@ -187,6 +187,8 @@ class ContactSystem {
   bool spin_ = false;           // the sweeps track the segments' angular velocities (omega_)
   std::vector<std::vector<Vec3>> omega_, torque_;  // per rod and segment (world)
   std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
+  std::vector<std::vector<Vec3>>
+      last_dv_;  // implicit: the true response to the last round's change
   std::vector<char> touched_;
   std::vector<std::vector<Vec3>> last_impulse_;  // implicit: per rod, the last step's totals
   std::vector<std::vector<Vec3>> last_torque_;   // and its torque impulses
@@ -222,7 +224,8 @@ class ContactSystem {
     Vec3 pr;
   };
   std::vector<Previous> previous_;
-  std::vector<Previous> old_;  // implicit: the impulses before a round's sweeps
+  std::vector<Previous> old_;      // implicit: the impulses before a round's sweeps
+  std::vector<Previous> last_dp_;  // implicit: the last round's change per contact
 };
 
 }  // namespace corde

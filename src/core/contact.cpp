@@ -186,8 +186,10 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   // (which responds more than the stiffness-coupled rod does, so they find too little impulse),
   // then the rods' true response to that change of the impulses, scaled by the factor that best
   // meets the normal constraints of the contacts carrying an impulse (a minimal-residual step:
-  // one round is exact for a single contact), and projected back into the Coulomb cones. The
-  // last response sets the rods' state.
+  // one round is exact for a single contact), and projected back into the Coulomb cones. From the
+  // second round on the step combines this change with the last round's (whose true response the
+  // last round left): one scale alone zig-zags between rounds where many contacts load a rod
+  // together. The last response sets the rods' state.
   const ContactSettings& cs = world.contact;
   const size_t nc = contacts_.size();
   // A rod whose step included predicted impulses is answered even without contacts now (the
@@ -287,30 +289,58 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
       return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
     };
-    double num = 0.0, den = 0.0;
+    const bool use_last = round > 0;
+    double num = 0.0, den = 0.0, num2 = 0.0, den2 = 0.0, cross = 0.0;
     for (const Contact& c : contacts_) {
       if (c.pn <= 0.0) continue;
       Vec3 vr = point(held_v_, c.rod_a, c.seg_a, c.s_a),
            dv = point(change_v_, c.rod_a, c.seg_a, c.s_a);
+      Vec3 dl = use_last ? point(last_dv_, c.rod_a, c.seg_a, c.s_a) : Vec3::Zero();
       if (c.rod_b >= 0) {
         vr -= point(held_v_, c.rod_b, c.seg_b, c.s_b);
         dv -= point(change_v_, c.rod_b, c.seg_b, c.s_b);
+        if (use_last) dl -= point(last_dv_, c.rod_b, c.seg_b, c.s_b);
       } else {
         vr -= c.surface_velocity;
       }
       const double res = vr.dot(c.normal) - normal_target(c, cs, h), dres = dv.dot(c.normal);
+      const double dres2 = dl.dot(c.normal);
       num += res * dres;
       den += dres * dres;
+      num2 += res * dres2;
+      den2 += dres2 * dres2;
+      cross += dres * dres2;
     }
-    const double alpha = den > 0.0 ? std::clamp(-num / den, 1.0, cs.max_round_scale) : 1.0;
+    // With the last round's change as a second direction, the pair's best combination (unless
+    // the two responses are nearly parallel); the last change's weight is bounded as this one's.
+    double alpha = den > 0.0 ? std::clamp(-num / den, 1.0, cs.max_round_scale) : 1.0;
+    double beta = 0.0;
+    const double det = den * den2 - cross * cross;
+    if (use_last && det > 1e-9 * den * den2) {
+      alpha = std::clamp((num2 * cross - num * den2) / det, 1.0, cs.max_round_scale);
+      beta = std::clamp(-(num2 + alpha * cross) / den2, -cs.max_round_scale, cs.max_round_scale);
+    }
+    last_dp_.resize(nc);
     for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
-      c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn));
-      c.pt = within(tangential(old_[k].pt + alpha * (c.pt - old_[k].pt), c.normal), c.mu * c.pn);
+      const double dpn = use_last ? last_dp_[k].pn : 0.0;
+      const Vec3 dpt = use_last ? last_dp_[k].pt : Vec3::Zero();
+      c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn) + beta * dpn);
+      c.pt = within(tangential(old_[k].pt + alpha * (c.pt - old_[k].pt) + beta * dpt, c.normal),
+                    c.mu * c.pn);
       // Rolling resistance as swept (the scale fits the normal rows), within the new bound.
       if (c.roll > 0.0) c.pr = within(c.pr, c.roll * c.pn);
+      last_dp_[k] = {0, c.pn - old_[k].pn, c.pt - old_[k].pt, c.pr - old_[k].pr};
     }
     respond_all();
+    // The true response to the change just made (clamps and cones included).
+    last_dv_.resize(nr);
+    for (int r = 0; r < nr; ++r)
+      if (touched_[r]) {
+        last_dv_[r].resize(velocity_[r].size());
+        for (size_t i = 0; i < velocity_[r].size(); ++i)
+          last_dv_[r][i] = velocity_[r][i] - held_v_[r][i];
+      }
   }
   // Remembered per rod, as the next step's prediction.
   last_impulse_.resize(nr);
