@@ -239,6 +239,10 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   };
   respond_all();
   old_.resize(nc);
+  last_dp_.resize(nc);
+  last_dv_.resize(nr);
+  for (int r = 0; r < nr; ++r)
+    if (touched_[r]) last_dv_[r].resize(rods[r].num_nodes());
   stats_.iterations = 0;
   // How far the true velocities leave a contact closing past its target over the step, in units
   // of the rod's radius.
@@ -320,7 +324,6 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       alpha = std::clamp((num2 * cross - num * den2) / det, 1.0, cs.max_round_scale);
       beta = std::clamp(-(num2 + alpha * cross) / den2, -cs.max_round_scale, cs.max_round_scale);
     }
-    last_dp_.resize(nc);
     for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
       const double dpn = use_last ? last_dp_[k].pn : 0.0;
@@ -334,13 +337,10 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     }
     respond_all();
     // The true response to the change just made (clamps and cones included).
-    last_dv_.resize(nr);
     for (int r = 0; r < nr; ++r)
-      if (touched_[r]) {
-        last_dv_[r].resize(velocity_[r].size());
+      if (touched_[r])
         for (size_t i = 0; i < velocity_[r].size(); ++i)
           last_dv_[r][i] = velocity_[r][i] - held_v_[r][i];
-      }
   }
   // Remembered per rod, as the next step's prediction.
   last_impulse_.resize(nr);
