@@ -259,8 +259,17 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     }
     return worst;
   };
+  // The step's largest motion in radii (with the warm-started impulses), for the tolerance.
+  double motion = 0.0;
+  for (int r = 0; r < nr; ++r)
+    if (touched_[r])
+      for (const Vec3& v : velocity_[r])
+        motion = std::max(motion, h * v.norm() / rods[r].section().radius);
+  const double tolerance =
+      std::clamp(0.01 * motion, std::min(cs.implicit_tolerance_min, cs.implicit_tolerance),
+                 cs.implicit_tolerance);
   for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
-    if (round > 0 && violation() <= cs.implicit_tolerance) break;
+    if (round > 0 && violation() <= tolerance) break;
     ++stats_.rounds;
     for (size_t k = 0; k < nc; ++k)
       old_[k] = {0, contacts_[k].pn, contacts_[k].pt, contacts_[k].pr};

@@ -348,28 +348,6 @@ corde::Scene rope_on_floor(int n, bool self, bool set = false) {
   return scene;
 }
 
-// A 1 m rope (100 elements, r = 5 mm) coiled as it came off a spool and set in that shape
-// (rest_shape: created): 1.15 turns of radius 0.14 m rising 1.2 cm a turn, so that the end lies
-// across the start, 3 cm above a floor; self contact on.
-corde::Scene dropped_coil() {
-  std::ostringstream y;
-  y.precision(9);
-  y << "time_step: 2.0e-3\nintegrator: implicit_euler\nduration: 3\n"
-    << "obstacles:\n  - {name: floor, type: plane, normal: [0, 0, 1], friction: 0.5}\n"
-    << "contact: {friction: 0.4}\n"
-    << "rods:\n  - name: rope\n    elements: 100\n    radius: 0.005\n"
-    << "    material: {preset: nylon_rope, E: 1.0e7, E_s: 1.0e7}\n"
-    << "    contact: {self: true}\n    rest_shape: created\n"
-    << "    shape:\n      type: polyline\n      points:\n";
-  const double radius = 0.14, turns = 1.0 / (2.0 * M_PI * radius);  // turns per metre
-  for (int i = 0; i <= 400; ++i) {
-    const double s = i / 400.0, a = 2.0 * M_PI * turns * s;
-    y << "        - [" << radius * std::cos(a) << ", " << radius * std::sin(a) << ", "
-      << 0.03 + 0.012 * a / (2.0 * M_PI) << "]\n";
-  }
-  return corde::parse_scene(y.str());
-}
-
 // CPU time of the calling thread (s): the whole-run benchmarks report it beside the wall time.
 double thread_cpu_seconds() {
   timespec t;
@@ -459,8 +437,9 @@ BENCHMARK(BM_RopeCoilSetImplicit)->Unit(benchmark::kMicrosecond);
 // scene 0: the pre-stressed spiral of BM_RopeOnFloorSelfContact from its start, 3 s (it springs
 // open on itself in the first 0.1 s, slides until about 1.2 s, then lies still). scene 1:
 // config/scenes/rope_pile.yaml, 4 s (the rope lowered into a pile of loops on the floor, self
-// contact throughout). scene 2: a coiled cable that has set (rest_shape: created) dropped from
-// 3 cm onto the floor, 3 s: 1.15 turns of 14 cm radius, its last turn lying across its first.
+// contact throughout). scene 2: config/scenes/coiled_cable.yaml, 3 s (a coiled cable that has set,
+// rest_shape: created, dropped from 3 cm onto the floor: 1.15 turns of 14 cm radius, its last
+// turn lying across its first).
 // Second argument: Gauss-Seidel sweeps per round of the contact solve (ContactSettings::
 // implicit_sweeps; 4 is the default, 30 swept each round to convergence before).
 void BM_RopeFloorWholeRunImplicit(benchmark::State& state) {
@@ -472,11 +451,10 @@ void BM_RopeFloorWholeRunImplicit(benchmark::State& state) {
     double duration = 3.0;
     if (state.range(0) == 0) {
       scene = std::make_unique<corde::Scene>(rope_on_floor(100, true));
-    } else if (state.range(0) == 2) {
-      scene = std::make_unique<corde::Scene>(dropped_coil());
     } else {
+      const char* file = state.range(0) == 2 ? "coiled_cable.yaml" : "rope_pile.yaml";
       scene = std::make_unique<corde::Scene>(
-          corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/rope_pile.yaml"));
+          corde::load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/" + file));
       duration = scene->duration;
     }
     corde::World& world = scene->world;
@@ -550,6 +528,18 @@ void BM_RopePile(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RopePile)->Unit(benchmark::kMicrosecond);
+
+// config/scenes/coiled_cable.yaml after its 3 s (the coil lies on the floor, its end resting across
+// the strand below: about 100 floor contacts and a few self contacts carrying load), at the
+// scene's own step (implicit, 2 ms).
+void BM_CoiledCable(benchmark::State& state) {
+  static const std::unique_ptr<corde::Scene> scene = settled_scene("coiled_cable.yaml", 3.0);
+  if (scene == nullptr) return state.SkipWithError("config/scenes/coiled_cable.yaml not found");
+  run_world(state, scene->world, elements(scene->world));
+  state.counters["newton"] = scene->world.implicit_stats().iterations;
+}
+
+BENCHMARK(BM_CoiledCable)->Unit(benchmark::kMicrosecond);
 
 // The knot scene, its ends pulled 0.14 m each in 3 s (as far as the scene pulls in 47 s at 3 mm/s:
 // the loop about 3 cm across, the strands pressed together along the braid), then timed while the

@@ -23,7 +23,7 @@ TEST(SceneFiles, DirectoryHoldsTheExpectedScenes) {
        {"default", "coiling_50", "coiling_100", "coiling_1000", "preshaped_spring",
         "preshaped_wire", "thread", "helical_buckling", "plectoneme", "plectoneme_contact",
         "lift_and_lay", "rope_pendulum_air", "drape_table", "rod_stack", "rope_pile",
-        "overhand_knot", "gripper_sweep", "tie_overhand_knot", "pick_and_place"})
+        "overhand_knot", "gripper_sweep", "tie_overhand_knot", "pick_and_place", "coiled_cable"})
     EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
 }
 
