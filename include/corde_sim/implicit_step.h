@@ -65,9 +65,10 @@ struct ImplicitOptions {
   double tolerance = 1e-8;
   // ... or below this fraction of the predicted contact forces (their sum of magnitudes, torques /
   // mean segment length), the accuracy to which the contact solve resolves its impulses: its
-  // rounds stop once no contact closes past its target by more than 1e-3 of the radius, and a rope
-  // lying still on 101 contacts then sees its impulses change by about 1e-4 of the largest from
-  // step to step, 1e-4 / sqrt(101) = 1e-5 on this measure (a 2-norm against a sum of magnitudes).
+  // rounds stopped once no contact closed past its target by more than 1e-3 of the radius (at rest
+  // now 1e-4: ContactSettings::implicit_tolerance_min), and a rope lying still on 101 contacts then
+  // saw its impulses change by about 1e-4 of the largest from step to step, 1e-4 / sqrt(101) =
+  // 1e-5 on this measure (a 2-norm against a sum of magnitudes).
   // Below it a Newton iteration chases that noise at every step; it moves a node by at most h^2/m
   // times it.
   double prediction_tolerance = 1e-5;
