@@ -511,11 +511,6 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       chord_ok_ = false;
     }
     last_residual = res.residual;
-    if (!have_phi) {
-      phi = merit(rod, sys, h);
-      phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
-      have_phi = true;
-    }
     const bool kept = chord_ok_ && factor_reusable(rod);
     ++res.iterations;
     // The exact Hessian converges quadratically; where it is not positive definite (frames sheared
@@ -535,29 +530,60 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     d_ = -g_;
     solver_.solve(&d_);
     if (kept) project_gradient(&d_);  // the supports' directions may have turned since
-    // Backtracking line search (Armijo) on Phi along the retraction.
+    // Backtracking line search (Armijo) on Phi along the retraction. A full step that cuts the
+    // residual to a quarter is taken without Phi (the common case, and Newton's near the
+    // solution): Phi, an energy evaluation at both ends, is needed only where the step may
+    // overshoot.
     const double slope = g_.dot(d_);
     xs_ = x;
     qk_ = q;
+    auto set_theta = [&] {
+      for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+    };
     double alpha = 1.0, phi_new = phi;
-    bool accepted = false;
+    bool accepted = false, full_step = false;
     for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
       for (int i = 0; i < nn; ++i) x[i] = xs_[i] + alpha * d_.segment<3>(6 * i);
-      for (int s = 0; s < ns; ++s) {
+      for (int s = 0; s < ns; ++s)
         q[s] = (qk_[s] * exp_body(alpha * d_.segment<3>(6 * s + 3))).normalized();
-        theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+      const bool first = ls == 0;  // g_trial_ holds the gradient at this trial
+      if (!first) set_theta();
+      if (first) {
+        full_gradient(&g_trial_, &g_raw_trial_);  // sets theta_
+        if (norm_scaled(g_trial_) <= 0.25 * res.residual) {
+          g_.swap(g_trial_);
+          g_raw_.swap(g_raw_trial_);
+          accepted = full_step = true;
+          break;
+        }
+        if (!have_phi) {  // Phi at the iterate, evaluated only now
+          x.swap(xs_);
+          q.swap(qk_);
+          set_theta();
+          phi = merit(rod, sys, h);
+          phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
+          have_phi = true;
+          x.swap(xs_);
+          q.swap(qk_);
+          set_theta();
+        }
       }
       phi_new = merit(rod, sys, h);
       if (!std::isfinite(phi_new)) continue;
       if (phi_new <= phi + 1e-4 * alpha * slope) {
         accepted = true;
-        full_gradient(&g_, &g_raw_);
+        if (first) {
+          g_.swap(g_trial_);
+          g_raw_.swap(g_raw_trial_);
+        } else {
+          full_gradient(&g_, &g_raw_);
+        }
         break;
       }
       // Near the solution the change of Phi is lost in its round-off: accept a step that lowers
       // the residual instead.
       if (std::abs(phi_new - phi) <= 1e3 * std::numeric_limits<double>::epsilon() * phi_scale) {
-        full_gradient(&g_trial_, &g_raw_trial_);
+        if (!first) full_gradient(&g_trial_, &g_raw_trial_);
         if (norm_scaled(g_trial_) < res.residual) {
           g_.swap(g_trial_);
           g_raw_.swap(g_raw_trial_);
@@ -569,7 +595,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     if (!accepted) {
       x = xs_;
       q = qk_;
-      for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+      set_theta();
       if (kept) {  // a stale direction: try again with the matrix at this iterate
         factored_ = have_factor_ = false;
         last_kept = false;
@@ -580,6 +606,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       break;
     }
     phi = phi_new;
+    have_phi = !full_step;
   }
   if (!res.converged) {
     res.residual = norm_scaled(g_);
