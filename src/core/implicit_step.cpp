@@ -547,8 +547,9 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       for (int s = 0; s < ns; ++s)
         q[s] = (qk_[s] * exp_body(alpha * d_.segment<3>(6 * s + 3))).normalized();
       const bool first = ls == 0;  // g_trial_ holds the gradient at this trial
-      if (!first) set_theta();
-      if (first) {
+      if (!first) {
+        set_theta();
+      } else {
         full_gradient(&g_trial_, &g_raw_trial_);  // sets theta_
         if (norm_scaled(g_trial_) <= 0.25 * res.residual) {
           g_.swap(g_trial_);

@@ -437,9 +437,9 @@ BENCHMARK(BM_RopeCoilSetImplicit)->Unit(benchmark::kMicrosecond);
 // scene 0: the pre-stressed spiral of BM_RopeOnFloorSelfContact from its start, 3 s (it springs
 // open on itself in the first 0.1 s, slides until about 1.2 s, then lies still). scene 1:
 // config/scenes/rope_pile.yaml, 4 s (the rope lowered into a pile of loops on the floor, self
-// contact throughout). scene 2: config/scenes/coiled_cable.yaml, 3 s (a coiled cable that has set,
+// contact throughout). scene 2: config/scenes/coiled_cable.yaml, 5 s (a coiled cable that has set,
 // rest_shape: created, dropped from 3 cm onto the floor: 1.15 turns of 14 cm radius, its last
-// turn lying across its first).
+// turn lying across its first; it lands, settles and rests).
 // Second argument: Gauss-Seidel sweeps per round of the contact solve (ContactSettings::
 // implicit_sweeps; 4 is the default, 30 swept each round to convergence before).
 void BM_RopeFloorWholeRunImplicit(benchmark::State& state) {
@@ -529,9 +529,9 @@ void BM_RopePile(benchmark::State& state) {
 
 BENCHMARK(BM_RopePile)->Unit(benchmark::kMicrosecond);
 
-// config/scenes/coiled_cable.yaml after its 3 s (the coil lies on the floor, its end resting across
-// the strand below: about 100 floor contacts and a few self contacts carrying load), at the
-// scene's own step (implicit, 2 ms).
+// config/scenes/coiled_cable.yaml after 3 s (the coil lies on the floor, its end resting across the
+// strand below: about 85 contacts within the margin, a few of them self contacts carrying load),
+// at the scene's own step (implicit, 2 ms).
 void BM_CoiledCable(benchmark::State& state) {
   static const std::unique_ptr<corde::Scene> scene = settled_scene("coiled_cable.yaml", 3.0);
   if (scene == nullptr) return state.SkipWithError("config/scenes/coiled_cable.yaml not found");
