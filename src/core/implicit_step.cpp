@@ -606,8 +606,10 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       full_gradient(&g_, &g_raw_);
       break;
     }
-    phi = phi_new;
-    have_phi = !full_step;
+    if (full_step)
+      have_phi = false;  // not evaluated at the new iterate
+    else
+      phi = phi_new;
   }
   if (!res.converged) {
     res.residual = norm_scaled(g_);

@@ -64,5 +64,29 @@ inline Overlap measure_overlap(const World& world) {
   return out;
 }
 
+// A scene run for `duration` seconds with its penetration watched: the contact stage's own report
+// (every step) and the overlaps from the geometry (every `every` steps and at the end).
+struct WatchedRun {
+  double reported = 0.0;  // the contact stage's deepest penetration at detection, every step
+  Overlap geometric;      // the deepest overlaps from the geometry, sampled
+};
+
+inline WatchedRun run_watched(World* w, double duration, int every) {
+  WatchedRun out;
+  const int steps = static_cast<int>(duration / w->time_step + 0.5);
+  for (int k = 1; k <= steps; ++k) {
+    w->step();
+    if (w->contacts() != nullptr)
+      out.reported = std::max(out.reported, w->contacts()->stats().max_penetration);
+    if (k % every == 0 || k == steps) {
+      const Overlap o = measure_overlap(*w);
+      out.geometric.obstacle = std::max(out.geometric.obstacle, o.obstacle);
+      out.geometric.rods = std::max(out.geometric.rods, o.rods);
+      out.geometric.self = std::max(out.geometric.self, o.self);
+    }
+  }
+  return out;
+}
+
 }  // namespace testing_overlap
 }  // namespace corde

@@ -18,33 +18,10 @@
 namespace corde {
 namespace {
 
-using testing_overlap::measure_overlap;
-using testing_overlap::Overlap;
+using testing_overlap::run_watched;
 
 std::string scene_path(const char* name) {
   return std::string(CORDE_SIM_SOURCE_DIR) + "/config/scenes/" + name;
-}
-
-struct RunResult {
-  double reported = 0.0;  // the contact stage's deepest penetration at detection, every step
-  Overlap geometric;      // the deepest overlaps from the geometry, every `every` steps
-};
-
-RunResult run(World* w, double duration, int every) {
-  RunResult out;
-  const int steps = static_cast<int>(duration / w->time_step + 0.5);
-  for (int k = 1; k <= steps; ++k) {
-    w->step();
-    if (w->contacts() != nullptr)
-      out.reported = std::max(out.reported, w->contacts()->stats().max_penetration);
-    if (k % every == 0 || k == steps) {
-      const Overlap o = measure_overlap(*w);
-      out.geometric.obstacle = std::max(out.geometric.obstacle, o.obstacle);
-      out.geometric.rods = std::max(out.geometric.rods, o.rods);
-      out.geometric.self = std::max(out.geometric.self, o.self);
-    }
-  }
-  return out;
 }
 
 double max_speed(const World& w) {
@@ -67,7 +44,7 @@ TEST(RodStack, StacksInLayersAndRestsWithoutPenetration) {
   World& w = s.world;
   ASSERT_EQ(w.rods().size(), 6u);
   const double r = w.rods()[0].section().radius;
-  const RunResult res = run(&w, s.duration, 10);
+  const auto res = run_watched(&w, s.duration, 10);
   ASSERT_TRUE(w.finite());
   EXPECT_LT(res.reported, 0.01 * r);
   EXPECT_LT(res.geometric.obstacle, 0.01 * r) << "into the floor";
@@ -100,7 +77,7 @@ TEST(RodStack, WithSurfaceFrictionRollingResistanceBringsItToRest) {
                           std::string("contact.rolling_friction=") + (on ? "0.05" : "0")});
     World& w = s.world;
     const double r = w.rods()[0].section().radius;
-    const RunResult res = run(&w, s.duration, 10);
+    const auto res = run_watched(&w, s.duration, 10);
     ASSERT_TRUE(w.finite());
     EXPECT_LT(res.geometric.rods, 0.01 * r) << "one rod into another";
     speed[on] = max_speed(w);
@@ -118,7 +95,7 @@ TEST(RodStack, WithoutRodContactRodsPassThroughEachOther) {
   for (int i = 0; i < 6; ++i) off.push_back("rods." + std::to_string(i) + ".contact.rods=false");
   Scene s = load_scene(scene_path("rod_stack.yaml"), off);
   const double r = s.world.rods()[0].section().radius;
-  const RunResult res = run(&s.world, 0.15, 10);
+  const auto res = run_watched(&s.world, 0.15, 10);
   EXPECT_LT(res.geometric.obstacle, 0.01 * r) << "the floor still holds";
   EXPECT_GT(res.geometric.rods, 0.5 * r);
 }
@@ -131,7 +108,7 @@ TEST(RopePile, PilesIntoLoopsRestingOnLoopsWithoutPenetration) {
   World& w = s.world;
   const Rod& rope = w.rods()[0];
   const double r = rope.section().radius;
-  const RunResult res = run(&w, 3.0, 20);
+  const auto res = run_watched(&w, 3.0, 20);
   ASSERT_TRUE(w.finite());
   EXPECT_LT(res.reported, 0.01 * r);
   EXPECT_LT(res.geometric.obstacle, 0.01 * r) << "into the floor";
@@ -175,7 +152,7 @@ TEST(RopePile, PilesIntoLoopsRestingOnLoopsWithoutPenetration) {
 TEST(RopePile, WithoutSelfContactTheRopePassesThroughItself) {
   Scene s = load_scene(scene_path("rope_pile.yaml"), {"rods.rope.contact.self=false"});
   const double r = s.world.rods()[0].section().radius;
-  const RunResult res = run(&s.world, 0.6, 20);
+  const auto res = run_watched(&s.world, 0.6, 20);
   EXPECT_LT(res.geometric.obstacle, 0.01 * r) << "the floor still holds";
   EXPECT_GT(res.geometric.self, 0.5 * r);
 }
