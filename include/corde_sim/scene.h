@@ -26,6 +26,15 @@ struct SceneLimits {
   static constexpr long max_total_elements = 200000;  // elements of all rods together
   static constexpr int max_items = 10000;             // loads or boundary entries of a rod
   static constexpr int max_grasps = 1000;             // grasps in a scene
+  // Files a scene refers to, and geometry (URDFs, meshes, obstacles): bounded so that a hostile or
+  // mistaken file is refused with a message instead of exhausting memory or the stack.
+  static constexpr long max_keyframe_file_bytes = 1 << 20;  // keyframe CSV (1 MiB)
+  static constexpr long max_urdf_bytes = 16L << 20;         // URDF text (16 MiB)
+  static constexpr int max_urdf_links = 100000;             // links of one URDF
+  static constexpr long max_mesh_bytes = 64L << 20;         // one mesh file (64 MiB)
+  static constexpr long max_mesh_triangles = 1000000;       // triangles of one mesh
+  static constexpr long max_mesh_vertices = 3000000;        // vertices of one mesh
+  static constexpr double max_length = 1.0e4;              // m: any size, position or extent
 };
 
 struct Scene {
