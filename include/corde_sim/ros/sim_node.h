@@ -114,6 +114,13 @@ class SimNode {
   // Whether grasp `name` is scripted, not held and its script will still take hold (before its
   // grasp_time, or unable to take hold yet): not one its script already let go.
   bool waiting_to_take_hold(const std::string& name) const;
+  // "" or why a world whose steps cost more than kMaxStepSeconds of wall time cannot be run:
+  // estimated from the current world's step cost per element first (a hopeless request costs
+  // nothing), then measured by one step of a copy.
+  std::string check_step_cost(const corde::World& candidate) const;
+  // A released grasp made through ~grasp (not the scene's), without a wrench: its topics and its
+  // entry go. Returns whether it did.
+  bool forget_grasp(const std::string& name);
   void refresh_layout();
   void refresh_if_grasps_changed();
   void apply_inputs();
@@ -141,12 +148,15 @@ class SimNode {
   bool on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool on_step(Step::Request& req, Step::Response& res);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
+  bool grasp(Grasp::Request& req, Grasp::Response& res);  // on_grasp before bounding the reply
   bool on_release(Release::Request& req, Release::Response& res);
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
   void on_reconfigure(NodeConfig& config, uint32_t level);
 
   // Loop and outputs.
   void advance(double now);
+  // While paused: runs steps queued by ~step in batches, outputs between them.
+  void run_queued_steps(double now);
   // The stability guard (corde::StepGuard) checks the state after each batch of steps (and every
   // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
   // returns false while it has given up (the world then stays at its last good state).
@@ -196,6 +206,7 @@ class SimNode {
   double time_offset_ = 0.0;  // node simulation time = time_offset_ + world_.time()
   ros::Time epoch_;           // ROS time of simulation time 0 when not publishing /clock
   bool paused_ = false;
+  long queued_steps_ = 0;  // ~step's steps not run yet (only while paused)
   Pacer pacer_;
   bool markers_clear_ = true;
   double stability_margin_ = 0.0;  // h / h_crit, largest over rods
