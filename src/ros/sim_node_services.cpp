@@ -259,11 +259,19 @@ bool SimNode::on_step(Step::Request& req, Step::Response& res) {
   update_tf_holders();
   apply_inputs();
   const int detections = recoveries_;
-  // What fits in one batch runs now (res.time is after it); the rest is queued, so that a large
-  // request cannot silence the outputs.
-  const double budget = std::max(3.0 / params_.loop_rate, 0.02);
-  const long done = run_steps(req.steps, wall_seconds() + budget);
-  res.success = settle_guard();
+  // The steps run in the call for up to kStepCallSeconds, in slices with the outputs between
+  // (they keep their rate); res.time is after them. The rest is queued, so that a large request
+  // neither silences the outputs nor holds the callbacks.
+  const double call_end = wall_seconds() + kStepCallSeconds;
+  long done = 0;
+  res.success = true;
+  while (done < req.steps && res.success) {
+    const double now = wall_seconds();
+    if (now >= call_end) break;
+    done += run_steps(req.steps - done, std::max(std::min(schedule_.next_due(), call_end), now));
+    res.success = settle_guard();
+    publish_due(wall_seconds());
+  }
   if (res.success) check_holders_and_strain();
   res.time = sim_time();
   const std::string stepped = "stepped " + std::to_string(done) + " step(s)";

@@ -24,6 +24,7 @@ constexpr size_t kMaxReply = 1000;          // characters of a service reply's m
 constexpr int kMaxGrasps = 64;              // grasps listed at once (scene and ~grasp)
 constexpr double kMaxStepSeconds = 0.1;     // wall time one step may take (configure, reset)
 constexpr long kMaxQueuedSteps = 10000000;  // ~step requests waiting to run
+constexpr double kStepCallSeconds = 0.5;    // wall time a ~step call steps before queueing the rest
 
 // An input as a reply may repeat it: at most kMaxEcho characters, then how long it was.
 inline std::string clip(const std::string& s) {
