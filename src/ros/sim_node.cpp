@@ -121,9 +121,24 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
   services_.push_back(pnh_.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
 
-  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once).
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(pnh_);
+  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once, in
+  // this thread); later requests are served by its own thread.
+  reconfigure_accepted_.real_time_factor = params_.real_time_factor;
+  reconfigure_accepted_.tf_rate = params_.tf_rate;
+  reconfigure_accepted_.marker_rate = params_.marker_rate;
+  reconfigure_accepted_.state_rate = params_.state_rate;
+  reconfigure_accepted_.marker_style =
+      params_.marker_style == MarkerStyle::kLineStrip ? "line_strip" : "cylinders";
+  reconfigure_accepted_.marker_min_diameter = params_.marker_min_diameter;
+  reconfigure_accepted_.holder_max_speed = params_.holder_max_speed;
+  reconfigure_accepted_.holder_max_acceleration = params_.holder_max_acceleration;
+  ros::NodeHandle reconfigure_nh(pnh_);
+  reconfigure_nh.setCallbackQueue(&reconfigure_queue_);
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(reconfigure_nh);
   reconfigure_->setCallback([this](NodeConfig& c, uint32_t level) { on_reconfigure(c, level); });
+  apply_reconfigure();
+  reconfigure_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &reconfigure_queue_);
+  reconfigure_spinner_->start();
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
   diagnostics_->setHardwareID("corde_sim");
@@ -514,6 +529,7 @@ int SimNode::run() {
   double output_wall_total = 0.0, output_wall_max = 0.0;
   while (ros::ok()) {
     queue->callAvailable(ros::WallDuration(0));
+    apply_reconfigure();
     update_tf_holders();
     update_robot();
     now = wall_seconds();

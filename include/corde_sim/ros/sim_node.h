@@ -11,7 +11,9 @@
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <ros/spinner.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
@@ -20,6 +22,7 @@
 
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -151,7 +154,11 @@ class SimNode {
   bool grasp(Grasp::Request& req, Grasp::Response& res);  // on_grasp before bounding the reply
   bool on_release(Release::Request& req, Release::Response& res);
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
+  // dynamic_reconfigure's callback (its own thread): checks the request against the last accepted
+  // one (the reply shows what was kept) and leaves it for the loop, which applies it in
+  // apply_reconfigure().
   void on_reconfigure(NodeConfig& config, uint32_t level);
+  void apply_reconfigure();
 
   // Loop and outputs.
   void advance(double now);
@@ -236,7 +243,16 @@ class SimNode {
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  // dynamic_reconfigure runs on its own queue and thread: its server writes every parameter to
+  // the master (one XMLRPC round trip each) per request, which must not stall the loop when a
+  // client sends many requests or the master is slow. Declared in this order so that the thread
+  // stops first, then the server, then the queue and the mutex go.
+  ros::CallbackQueue reconfigure_queue_;
+  std::mutex reconfigure_mutex_;
+  NodeConfig reconfigure_accepted_;   // the last accepted values (reconfigure_mutex_)
+  bool reconfigure_pending_ = false;  // not applied by the loop yet (reconfigure_mutex_)
   std::unique_ptr<dynamic_reconfigure::Server<NodeConfig>> reconfigure_;
+  std::unique_ptr<ros::AsyncSpinner> reconfigure_spinner_;
   TfFrames tf_frames_;
   RodPaths rod_paths_;
 
