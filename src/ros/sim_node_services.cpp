@@ -38,7 +38,10 @@ std::string clip_all(std::string text, const std::string& input) {
 }  // namespace
 
 std::string SimNode::check_step_cost(const corde::World& candidate) const {
-  const std::string limit = "more than the " + num(kMaxStepSeconds) +
+  // A scene started with slower steps (start-up is not checked) may be reset and configured at
+  // up to twice its measured cost.
+  const double allowed = std::max(kMaxStepSeconds, 2e-6 * step_time_us_);
+  const std::string limit = "more than the " + num(allowed) +
                             " s per step the node allows (it serves its outputs between steps)";
   // More elements: first a rough estimate from a step of the world running now with the
   // candidate's integrator and step, scaled by the square of the element ratio (contacts and the
@@ -54,13 +57,13 @@ std::string SimNode::check_step_cost(const corde::World& candidate) const {
     const double now = trial_step_seconds(probe);
     const double ratio = static_cast<double>(after) / static_cast<double>(before);
     const double estimate = now * ratio * ratio;
-    if (estimate > 10.0 * kMaxStepSeconds)
+    if (estimate > 10.0 * allowed)
       return "one step would take roughly " + num(estimate) + " s (" + num(1e3 * now) +
              " ms per step now at " + std::to_string(before) + " elements, times the square of " +
              std::to_string(after) + " / " + std::to_string(before) + "), " + limit;
   }
   const double measured = trial_step_seconds(candidate);
-  if (measured > kMaxStepSeconds)
+  if (measured > allowed)
     return "one step takes " + num(measured) + " s (measured on a trial step of " +
            std::to_string(after) + " elements), " + limit;
   return "";
