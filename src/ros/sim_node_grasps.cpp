@@ -443,8 +443,9 @@ void SimNode::on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool
     try {
       tf_buffer_->setTransform(t, authority, is_static);
     } catch (const std::exception& e) {
+      // (tf2's message quotes the frame ids, which may be of any length)
       ROS_WARN_THROTTLE(5.0, "corde_sim: ignoring a transform from %s: %s", authority.c_str(),
-                        e.what());
+                        clip_reply(e.what()).c_str());
     }
   }
 }
