@@ -66,6 +66,9 @@ class GraspSet {
   void attach(World& world, const std::string& name, const Eigen::Isometry3d& holder,
               const Eigen::Isometry3d* offset, double now);
   void clear() { grasps_.clear(); }
+  // Forgets a grasp (the caller's choice: one released, without a wrench, so the world is
+  // unaffected). Returns whether it was there.
+  bool erase(const std::string& name) { return grasps_.erase(name) > 0; }
 
   GraspState* find(const std::string& name);
   const GraspState* find(const std::string& name) const;

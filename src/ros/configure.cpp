@@ -30,7 +30,7 @@ const KeyRange kRanges[] = {
     {"gamma_r", 0.0, 1e9, true, "N m^2 s"},
     {"radius", 0.0, 1.0, false, "m"},
     {"elements", 1.0, 100000.0, true, ""},
-    {"time_step", 0.0, 0.01, false, "s"},
+    {"time_step", 1e-9, 0.01, true, "s"},  // below 1e-9 s the clock would hardly advance
     {"gravity_x", -1000.0, 1000.0, true, "m/s^2"},
     {"gravity_y", -1000.0, 1000.0, true, "m/s^2"},
     {"gravity_z", -1000.0, 1000.0, true, "m/s^2"},
@@ -128,7 +128,8 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
     return "nothing to configure: no keys, no flags and no integrator";
   if (!integrator.empty()) {
     if (!corde::parse_integrator(integrator, &plan->integrator))
-      return "unknown integrator '" + integrator + "' (integrators: " + integrator_names() + ")";
+      return "unknown integrator '" + clip(integrator) + "' (integrators: " + integrator_names() +
+             ")";
     plan->set_integrator = true;
   }
   if (rod.empty()) {
@@ -139,7 +140,7 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
                      [&](const corde::Rod& r) { return r.name() == rod; })) {
       std::vector<std::string> names;
       for (const corde::Rod& r : rods) names.push_back(r.name());
-      return "no rod named '" + rod + "' (rods: " + join(names) + ")";
+      return "no rod named '" + clip(rod) + "' (rods: " + join(names) + ")";
     }
     plan->rods.push_back(rod);
   }
@@ -147,7 +148,7 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
     const std::string& k = keys[i];
     const double v = values[i];
     const KeyRange* range = find_range(k);
-    if (!range) return "unknown key '" + k + "' (keys: " + join(configure_keys()) + ")";
+    if (!range) return "unknown key '" + clip(k) + "' (keys: " + join(configure_keys()) + ")";
     if (plan->values.count(k)) return "key '" + k + "' given twice";
     if (!std::isfinite(v)) return k + " must be finite, got " + num(v);
     const bool low_ok = range->lo_inclusive ? v >= range->lo : v > range->lo;
@@ -163,7 +164,7 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
   for (size_t i = 0; i < flags.size(); ++i) {
     const auto& known = configure_flags();
     if (std::find(known.begin(), known.end(), flags[i]) == known.end())
-      return "unknown flag '" + flags[i] + "' (flags: " + join(known) + ")";
+      return "unknown flag '" + clip(flags[i]) + "' (flags: " + join(known) + ")";
     if (plan->flags.count(flags[i])) return "flag '" + flags[i] + "' given twice";
     plan->flags[flags[i]] = flag_values[i];
   }

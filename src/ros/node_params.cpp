@@ -102,7 +102,7 @@ GraspSource parse_grasp_source(const std::string& s) {
   if (s == "topic") return GraspSource::kTopic;
   if (s == "tf") return GraspSource::kTf;
   if (s == "fixed") return GraspSource::kFixed;
-  throw std::invalid_argument("grasp source must be topic, tf or fixed, got '" + s + "'");
+  throw std::invalid_argument("grasp source must be topic, tf or fixed, got '" + clip(s) + "'");
 }
 
 const char* to_string(GraspSource s) {

@@ -121,9 +121,24 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
   services_.push_back(pnh_.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
 
-  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once).
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(pnh_);
+  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once, in
+  // this thread); later requests are served by its own thread.
+  reconfigure_accepted_.real_time_factor = params_.real_time_factor;
+  reconfigure_accepted_.tf_rate = params_.tf_rate;
+  reconfigure_accepted_.marker_rate = params_.marker_rate;
+  reconfigure_accepted_.state_rate = params_.state_rate;
+  reconfigure_accepted_.marker_style =
+      params_.marker_style == MarkerStyle::kLineStrip ? "line_strip" : "cylinders";
+  reconfigure_accepted_.marker_min_diameter = params_.marker_min_diameter;
+  reconfigure_accepted_.holder_max_speed = params_.holder_max_speed;
+  reconfigure_accepted_.holder_max_acceleration = params_.holder_max_acceleration;
+  ros::NodeHandle reconfigure_nh(pnh_);
+  reconfigure_nh.setCallbackQueue(&reconfigure_queue_);
+  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(reconfigure_nh);
   reconfigure_->setCallback([this](NodeConfig& c, uint32_t level) { on_reconfigure(c, level); });
+  apply_reconfigure();
+  reconfigure_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &reconfigure_queue_);
+  reconfigure_spinner_->start();
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
   diagnostics_->setHardwareID("corde_sim");
@@ -181,8 +196,15 @@ long SimNode::run_steps(long n, double deadline) {
   scripted_.clear();  // keeps its capacity
   for (auto& kv : wiring_)
     if (kv.second.scripted) scripted_.emplace_back(&kv.first, &kv.second);
+  // The deadline is checked after the first step, then every 8 steps while steps are fast, and
+  // after every step once they are slow (over 50 us): a batch overruns it by one step at most.
+  bool slow = false;
   for (; k < n && !guard_.failed(); ++k) {
-    if (k > 0 && (k & 7) == 0 && wall_seconds() > deadline) break;
+    if (k > 0 && (slow || k == 1 || (k & 7) == 0)) {
+      const double now = wall_seconds();
+      if (now > deadline) break;
+      slow = now - t0 > 5e-5 * static_cast<double>(k);
+    }
     if (!guard_.step(&world_, 1, step_fn_)) break;
   }
   const double dt = wall_seconds() - t0;
@@ -219,6 +241,29 @@ void SimNode::advance(double now) {
   }
   if (settle_guard()) check_holders_and_strain();
   refresh_if_grasps_changed();  // (the guard may have replayed a scripted grasp or release)
+}
+
+void SimNode::run_queued_steps(double now) {
+  apply_inputs();
+  if (guard_.failed()) {
+    queued_steps_ = 0;
+    return;
+  }
+  // As a paced batch: a few loop periods at most, and not past the next output.
+  const double budget = std::max(3.0 / params_.loop_rate, 0.02);
+  const double end = std::max(std::min(now + budget, schedule_.next_due()), now);
+  queued_steps_ -= run_steps(queued_steps_, end);
+  if (settle_guard()) {
+    check_holders_and_strain();
+  } else {
+    ROS_WARN(
+        "corde_sim: %ld queued ~step step(s) dropped: the stability guard stopped the "
+        "simulation",
+        queued_steps_);
+    queued_steps_ = 0;
+  }
+  refresh_if_grasps_changed();
+  if (queued_steps_ == 0) ROS_INFO("corde_sim: queued ~step steps done at t = %.6f s", sim_time());
 }
 
 void SimNode::refresh_if_grasps_changed() {
@@ -362,7 +407,8 @@ void SimNode::publish_state() {
   fill_rod_states(world_, msg.get());
   msg->sim_time = sim_time();
   msg->steps = steps_total_;
-  msg->substeps_per_publish = static_cast<int>(substeps_per_publish_);
+  msg->substeps_per_publish =
+      static_cast<int>(std::min<long>(substeps_per_publish_, std::numeric_limits<int>::max()));
   msg->time_step = world_.time_step;
   msg->step_time_us = step_time_us_;
   msg->real_time_factor = measured_rtf_;
@@ -432,6 +478,8 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("real-time factor (measured)", measured_rtf_);
   stat.add("real-time factor (target, 0 = max)", target);
   stat.add("substeps per loop", steps_last_iteration_);
+  stat.add("queued steps", queued_steps_);    // ~step's, run while paused
+  stat.add("queued inputs", inputs_.size());  // at most one per grasp and kind
   stat.add("stability margin h/h_crit", stability_margin_);
   stat.add("stability limiting rod", limiting_rod_);
   stat.add("rods", world_.rods().size());
@@ -481,10 +529,14 @@ int SimNode::run() {
   double output_wall_total = 0.0, output_wall_max = 0.0;
   while (ros::ok()) {
     queue->callAvailable(ros::WallDuration(0));
+    apply_reconfigure();
     update_tf_holders();
     update_robot();
     now = wall_seconds();
-    if (!paused_) advance(now);
+    if (!paused_)
+      advance(now);
+    else if (queued_steps_ > 0)
+      run_queued_steps(now);
     now = wall_seconds();
     publish_due(now);
     diagnostics_->update();
@@ -497,7 +549,9 @@ int SimNode::run() {
     output_wall_max = std::max(output_wall_max, out_wall);
     if (now >= bench_end) break;
     double wake = now;
-    if (paused_)
+    if (paused_ && queued_steps_ > 0)
+      wake = now;  // more queued steps: only the callbacks waiting now are served
+    else if (paused_)
       wake = std::min(schedule_.next_due(), now + 0.05);  // rod_state keeps its rate while paused
     else if (pacer_.paced())
       wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);

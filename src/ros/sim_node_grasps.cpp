@@ -2,11 +2,11 @@
 // Callbacks check a message and queue it as an InputEvent; apply_inputs() hands the queue to the
 // library's GraspSet at the start of the next batch of steps.
 #include <ros/package.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <fstream>
 
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
@@ -14,15 +14,33 @@
 namespace corde_sim {
 namespace {
 
-// Valid as a graph name component, so that grasps/<name>/pose is a legal topic.
+// Valid as a graph name component, so that grasps/<name>/pose is a legal topic; bounded length.
 bool valid_name(const std::string& s) {
-  if (s.empty() || !std::isalpha(static_cast<unsigned char>(s[0]))) return false;
+  if (s.empty() || s.size() > kMaxNameLength || !std::isalpha(static_cast<unsigned char>(s[0])))
+    return false;
   return std::all_of(s.begin(), s.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
   });
 }
 
-bool file_exists(const std::string& path) { return std::ifstream(path).good(); }
+// stat() only: opening a FIFO to test it would block. (Whether it is a usable regular file is
+// check_input_file's business, with a message.)
+bool file_exists(const std::string& path) {
+  struct stat st;
+  return stat(path.c_str(), &st) == 0;
+}
+
+// Queues an input; an input of the same kind for the same grasp waiting since the last batch is
+// replaced (poses only by a newer one): the queue holds at most three inputs per grasp, however
+// many arrive while the simulation is paused or busy.
+void queue_input(InputQueue* queue, InputEvent e) {
+  for (InputEvent& old : *queue) {
+    if (old.kind != e.kind || old.grasp != e.grasp) continue;
+    if (e.kind != InputEvent::Kind::kPose || e.input_time >= old.input_time) old = std::move(e);
+    return;
+  }
+  queue->push_back(std::move(e));
+}
 
 // First pose input of a grasp: the holder's reference glides there over this long instead of
 // jumping (the holder limits shape the motion further).
@@ -46,7 +64,7 @@ std::string SimNode::resolve_scene(const std::string& path, std::string* error) 
   }
   if (path[0] == '/') {
     if (file_exists(path)) return path;
-    *error = "scene file '" + path + "' does not exist";
+    *error = "scene file '" + clip(path) + "' does not exist";
     return "";
   }
   // The node's working directory is ROS's (~/.ros), which says nothing to a user: a relative path
@@ -56,7 +74,8 @@ std::string SimNode::resolve_scene(const std::string& path, std::string* error) 
     for (const std::string& c : {pkg + "/" + path, pkg + "/config/scenes/" + path})
       if (file_exists(c)) return c;
   }
-  *error = "scene file '" + path + "' not found: a relative path is looked up in the package" +
+  *error = "scene file '" + clip(path) +
+           "' not found: a relative path is looked up in the package" +
            (pkg.empty() ? std::string(" (whose path is unknown)")
                         : " folder " + pkg + " and in " + pkg + "/config/scenes") +
            "; give an absolute path otherwise";
@@ -72,7 +91,9 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
       return "grasp '" + spec.name + "': " + e.what();
     }
     if (!valid_name(spec.name))
-      return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
+      return "grasp name '" + clip(spec.name) +
+             "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*, at most " +
+             std::to_string(kMaxNameLength) + " characters)";
   }
   for (const std::string& w : scene.warnings) ROS_WARN("corde_sim: scene: %s", w.c_str());
   for (const std::string& s : scene.settled) ROS_INFO("corde_sim: scene: %s", s.c_str());
@@ -120,7 +141,13 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
                                const std::string& frame, bool from_scene, int* segment) {
   *segment = -1;
   if (!valid_name(spec.name))
-    return "grasp name '" + spec.name + "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*)";
+    return "grasp name '" + clip(spec.name) +
+           "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*, at most " +
+           std::to_string(kMaxNameLength) + " characters)";
+  if (!valid_frame_chars(frame) || frame.size() > kMaxNameLength)
+    return "grasp '" + spec.name + "': frame '" + clip(frame) +
+           "' is not a frame id ([A-Za-z0-9_/.-], at most " + std::to_string(kMaxNameLength) +
+           " characters)";
   if (source == GraspSource::kTf && frame.empty())
     return "grasp '" + spec.name + "': source tf needs a frame";
   const corde::GraspState* held = grasps_.find(spec.name);
@@ -202,6 +229,18 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   wire_grasp(spec.name, &w);
   *segment = seg;
   return "";
+}
+
+bool SimNode::forget_grasp(const std::string& name) {
+  const corde::GraspState* g = grasps_.find(name);
+  if (!g || g->held || !g->force.isZero() || !g->torque.isZero()) return false;
+  const auto& scene = initial_.grasps;
+  if (std::any_of(scene.begin(), scene.end(),
+                  [&](const corde::GraspSpec& s) { return s.name == name; }))
+    return false;       // the scene's grasps stay listed (and subscribed) until a reset
+  wiring_.erase(name);  // its subscriptions and reaction publisher end with it
+  grasps_.erase(name);
+  return true;
 }
 
 void SimNode::drive_scripted(corde::World* world, double t, double h) {
@@ -332,6 +371,11 @@ bool SimNode::lookup_world(const std::string& frame, const ros::Time& stamp, Eig
     *error = "frame_id is empty: say which frame it is in (e.g. '" + params_.world_frame + "')";
     return false;
   }
+  if (frame.size() > kMaxNameLength) {
+    *error = "frame_id '" + clip(frame) + "' is longer than " + std::to_string(kMaxNameLength) +
+             " characters";
+    return false;
+  }
   if (frame == params_.world_frame) {
     *out = Eigen::Isometry3d::Identity();
     return true;
@@ -339,12 +383,13 @@ bool SimNode::lookup_world(const std::string& frame, const ros::Time& stamp, Eig
   if (own_frame(frame, out)) return true;
   const std::string& world = params_.world_frame;
   if (!tf_buffer_->_frameExists(frame)) {
-    *error = "frame '" + frame + "' is unknown: no transform to or from it has been received";
+    *error = "frame '" + clip(frame) + "' is unknown: no transform to or from it has been received";
     return false;
   }
   std::string why;
   if (!tf_buffer_->canTransform(world, frame, ros::Time(0), &why)) {
-    *error = "frame '" + frame + "' is not connected to the world frame '" + world + "' in tf" +
+    *error = "frame '" + clip(frame) + "' is not connected to the world frame '" + world +
+             "' in tf" +
              (tf_buffer_->_frameExists(world)
                   ? std::string(": ") + why
                   : " (nothing links any frame to '" + world +
@@ -366,7 +411,7 @@ bool SimNode::lookup_world(const std::string& frame, const ros::Time& stamp, Eig
       // Static chains have stamp 0; a dynamic frame whose publisher stopped is not used.
       const double age = (ros::Time::now() - t.header.stamp).toSec();
       if (!t.header.stamp.isZero() && age > params_.max_frame_age) {
-        *error = "frame '" + frame + "' was last published " + num(age) +
+        *error = "frame '" + clip(frame) + "' was last published " + num(age) +
                  " s ago (~max_frame_age " + num(params_.max_frame_age) + " s)";
         return false;
       }
@@ -374,7 +419,7 @@ bool SimNode::lookup_world(const std::string& frame, const ros::Time& stamp, Eig
     *out = to_eigen(t);
     return true;
   } catch (const tf2::TransformException& e) {
-    *error = "frame '" + frame + "': " + e.what();
+    *error = "frame '" + clip(frame) + "': " + e.what();
     return false;
   }
 }
@@ -398,8 +443,9 @@ void SimNode::on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool
     try {
       tf_buffer_->setTransform(t, authority, is_static);
     } catch (const std::exception& e) {
+      // (tf2's message quotes the frame ids, which may be of any length)
       ROS_WARN_THROTTLE(5.0, "corde_sim: ignoring a transform from %s: %s", authority.c_str(),
-                        e.what());
+                        clip_reply(e.what()).c_str());
     }
   }
 }
@@ -499,7 +545,7 @@ void SimNode::on_pose(const std::string& name, const geometry_msgs::PoseStampedC
     return;
   }
   e.input_time = zero ? now.toSec() : msg->header.stamp.toSec();
-  inputs_.push_back(e);
+  queue_input(&inputs_, std::move(e));
 }
 
 void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg) {
@@ -524,7 +570,7 @@ void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStam
   // Free vectors: only the rotation applies.
   e.force = to_world.linear() * f;
   e.torque = to_world.linear() * tau;
-  inputs_.push_back(e);
+  queue_input(&inputs_, std::move(e));
 }
 
 void SimNode::on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg) {
@@ -545,7 +591,7 @@ void SimNode::on_twist_rate(const std::string& name, const std_msgs::Float64Cons
   e.kind = InputEvent::Kind::kTwistRate;
   e.grasp = name;
   e.rate = msg->data;
-  inputs_.push_back(e);
+  queue_input(&inputs_, std::move(e));
 }
 
 void SimNode::apply_inputs() {

@@ -3,11 +3,71 @@
 #include <cmath>
 #include <limits>
 
+#include "corde_sim/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
 #include "corde_sim/stability.h"
 
 namespace corde_sim {
+namespace {
+
+long total_elements(const corde::World& world) {
+  long n = 0;
+  for (const corde::Rod& r : world.rods()) n += r.num_segments();
+  return n;
+}
+
+// Wall time of one step of a copy of `world` (s).
+double trial_step_seconds(const corde::World& world) {
+  corde::World copy = world;
+  const double t0 = wall_seconds();
+  copy.step();
+  return wall_seconds() - t0;
+}
+
+// `text` with every occurrence of `input` clipped (clip()).
+std::string clip_all(std::string text, const std::string& input) {
+  if (input.size() <= kMaxEcho) return text;
+  const std::string short_form = clip(input);
+  for (size_t at = text.find(input); at != std::string::npos;
+       at = text.find(input, at + short_form.size()))
+    text.replace(at, input.size(), short_form);
+  return text;
+}
+
+}  // namespace
+
+std::string SimNode::check_step_cost(const corde::World& candidate) const {
+  // A scene started with slower steps (start-up is not checked) may be reset and configured at
+  // up to twice its measured cost.
+  const double allowed = std::max(kMaxStepSeconds, 2e-6 * step_time_us_);
+  const std::string limit = "more than the " + num(allowed) +
+                            " s per step the node allows (it serves its outputs between steps)";
+  // More elements: first a rough estimate from a step of the world running now with the
+  // candidate's integrator and step, scaled by the square of the element ratio (contacts and the
+  // implicit solve grow faster than the element count: corde_run steps the overhand knot with
+  // implicit_euler in about 0.1 s at 8000 elements, 8 s at 100000). Ten times the limit refuses a
+  // hopeless request without stepping it (the trial step below could take seconds); below that
+  // the trial step decides.
+  const long before = std::max(1L, total_elements(world_)), after = total_elements(candidate);
+  if (after > before) {
+    corde::World probe = world_;
+    probe.integrator = candidate.integrator;
+    probe.time_step = candidate.time_step;
+    const double now = trial_step_seconds(probe);
+    const double ratio = static_cast<double>(after) / static_cast<double>(before);
+    const double estimate = now * ratio * ratio;
+    if (estimate > 10.0 * allowed)
+      return "one step would take roughly " + num(estimate) + " s (" + num(1e3 * now) +
+             " ms per step now at " + std::to_string(before) + " elements, times the square of " +
+             std::to_string(after) + " / " + std::to_string(before) + "), " + limit;
+  }
+  const double measured = trial_step_seconds(candidate);
+  if (measured > allowed)
+    return "one step takes " + num(measured) + " s (measured on a trial step of " +
+           std::to_string(after) + " elements), " + limit;
+  return "";
+}
 
 std::string SimNode::stopped_note() const {
   return guard_.failed() ? "; the simulation is still stopped at its last good state (stability "
@@ -19,12 +79,14 @@ std::string SimNode::stopped_note() const {
 bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   reset(req, res);
   if (!res.success) res.message += stopped_note();
+  res.message = clip_reply(res.message);
   return true;
 }
 
 bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   configure(req, res);
   if (!res.success) res.message += stopped_note();
+  res.message = clip_reply(res.message);
   return true;
 }
 
@@ -32,12 +94,22 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   std::string path = scene_path_;
   if (!req.scene.empty()) {
     std::string error;
-    path = resolve_scene(req.scene, &error);
+    path = req.scene.size() > 4096 ? "" : resolve_scene(req.scene, &error);
     if (path.empty()) {
       res.success = false;
-      res.message = "scene not loaded, state unchanged: " + error;
+      res.message = "scene not loaded, state unchanged: " +
+                    (error.empty() ? "scene path '" + clip(req.scene) + "' is too long" : error);
       return;
     }
+  }
+  // A FIFO or device would block or never end (stat only: opening a FIFO blocks).
+  const std::string unusable =
+      corde::check_input_file(path, "scene file", corde::SceneLimits::max_file_bytes);
+  if (!unusable.empty()) {
+    res.success = false;
+    res.message = "scene not loaded, state unchanged: " + clip(path) +
+                  unusable.substr(std::min(path.size(), unusable.size()));
+    return;
   }
   corde::Scene scene;
   try {
@@ -46,10 +118,16 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
                                   : corde::load_scene(path);
   } catch (const std::exception& e) {
     res.success = false;
-    res.message = std::string("scene not loaded, state unchanged: ") + e.what();
+    res.message = "scene not loaded, state unchanged: " + clip_all(e.what(), path);
     return;
   }
   // The new world starts at its own time 0; the node's clock continues from where it was.
+  const std::string cost = check_step_cost(scene.world);
+  if (!cost.empty()) {
+    res.success = false;
+    res.message = "scene not used, state unchanged: " + cost;
+    return;
+  }
   const double t = sim_time();
   const std::string error = install_scene(std::move(scene), path);
   if (!error.empty()) {
@@ -61,8 +139,12 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   bump_time();
   pacer_.anchor(sim_time(), wall_seconds());
   res.success = true;
-  res.message = "reset to '" + path + "' at t = " + num(sim_time()) + " s" + guard_note_;
+  res.message = "reset to '" + clip(path) + "' at t = " + num(sim_time()) + " s" + guard_note_;
   guard_note_.clear();
+  if (queued_steps_ > 0) {
+    res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
+    queued_steps_ = 0;
+  }
   ROS_INFO("corde_sim: %s", res.message.c_str());
   return;
 }
@@ -107,6 +189,15 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
                   "); give a smaller time_step in the same request, or integrator implicit_euler";
     return;
   }
+  const std::string cost = check_step_cost(world);
+  if (!cost.empty()) {
+    res.success = false;
+    std::string asked;
+    for (size_t i = 0; i < req.keys.size(); ++i)
+      asked += (asked.empty() ? "" : ", ") + req.keys[i] + " " + num(req.values[i]);
+    res.message = "rejected, nothing changed (" + asked + "): " + cost;
+    return;
+  }
   std::swap(world_, world);
   settings_ = settings;
   for (const std::string& rod : plan.resample)
@@ -117,7 +208,7 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   refresh_layout();
   res.success = true;
   res.message = "configured " +
-                (req.rod.empty() ? std::string("all rods") : "rod '" + req.rod + "'") + ": " +
+                (req.rod.empty() ? std::string("all rods") : "rod '" + clip(req.rod) + "'") + ": " +
                 summary + "(" + corde::integrator_name(world_.integrator) +
                 (corde::is_implicit(world_.integrator) ? std::string(", no explicit step limit")
                                                        : ", h/h_crit " + num(stability_margin_)) +
@@ -133,6 +224,10 @@ bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Respo
   }
   res.success = true;
   res.message = std::string(paused_ ? "paused" : "running") + " at t = " + num(sim_time()) + " s";
+  if (!paused_ && queued_steps_ > 0) {
+    res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
+    queued_steps_ = 0;
+  }
   return true;
 }
 
@@ -148,26 +243,85 @@ bool SimNode::on_step(Step::Request& req, Step::Response& res) {
     res.message = "steps must be in [1, 10000000], got " + std::to_string(req.steps);
     return true;
   }
+  if (queued_steps_ + req.steps > kMaxQueuedSteps) {
+    res.success = false;
+    res.message = std::to_string(queued_steps_) + " step(s) are still queued; at most " +
+                  std::to_string(kMaxQueuedSteps) + " may wait";
+    return true;
+  }
+  const std::string queued_note =
+      "; they run while paused, in batches with rod_state and tf between them (unpausing or "
+      "~reset drops them)";
+  if (queued_steps_ > 0) {  // after the ones waiting
+    queued_steps_ += req.steps;
+    res.success = true;
+    res.message = "queued " + std::to_string(req.steps) + " step(s) behind " +
+                  std::to_string(queued_steps_ - req.steps) + " still queued" + queued_note;
+    return true;
+  }
   update_tf_holders();
   apply_inputs();
   const int detections = recoveries_;
-  run_steps(req.steps, std::numeric_limits<double>::infinity());
-  res.success = settle_guard();
+  // The steps run in the call for up to kStepCallSeconds, in slices with the outputs between
+  // (they keep their rate); res.time is after them. The rest is queued, so that a large request
+  // neither silences the outputs nor holds the callbacks.
+  const double call_end = wall_seconds() + kStepCallSeconds;
+  long done = 0;
+  res.success = true;
+  while (done < req.steps && res.success) {
+    const double now = wall_seconds();
+    if (now >= call_end) break;
+    done += run_steps(req.steps - done, std::max(std::min(schedule_.next_due(), call_end), now));
+    res.success = settle_guard();
+    publish_due(wall_seconds());
+  }
   if (res.success) check_holders_and_strain();
   res.time = sim_time();
-  res.message = !res.success ? "stopped at the last good state: the stability guard could not "
-                               "recover (" +
-                                   last_problem_ + "); ~reset or ~configure to resume"
-                : recoveries_ > detections
-                    ? "stepped " + std::to_string(req.steps) +
-                          " step(s); the stability guard rolled back and retried (" +
-                          last_problem_ + ")"
-                    : "stepped " + std::to_string(req.steps) + " step(s)";
+  const std::string stepped = "stepped " + std::to_string(done) + " step(s)";
+  if (res.success && done < req.steps) queued_steps_ = req.steps - done;
+  res.message =
+      !res.success ? "stopped at the last good state: the stability guard could not "
+                     "recover (" +
+                         last_problem_ + "); ~reset or ~configure to resume"
+      : recoveries_ > detections
+          ? stepped + "; the stability guard rolled back and retried (" + last_problem_ + ")"
+          : stepped;
+  if (queued_steps_ > 0)
+    res.message += "; queued the other " + std::to_string(queued_steps_) + queued_note;
   return true;
 }
 
 bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
+  const bool ok = grasp(req, res);
+  res.message = clip_reply(res.message);
+  return ok;
+}
+
+bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
   res.segment = -1;
+  // Names become topics and tf frames: bounded, and checked before anything echoes them whole.
+  for (const auto& n :
+       {std::make_pair(&req.name, "grasp name"), std::make_pair(&req.rod, "rod name"),
+        std::make_pair(&req.frame, "frame"), std::make_pair(&req.source, "source")}) {
+    const std::string error = check_name_length(*n.first, n.second);
+    if (!error.empty()) {
+      res.success = false;
+      res.message = error;
+      return true;
+    }
+  }
+  if (!req.frame.empty() && !valid_frame_chars(req.frame)) {
+    res.success = false;
+    res.message = "frame '" + clip(req.frame) + "' has characters other than [A-Za-z0-9_/.-]";
+    return true;
+  }
+  if (!grasps_.find(req.name) && grasps_.grasps().size() >= static_cast<size_t>(kMaxGrasps)) {
+    res.success = false;
+    res.message = "grasp '" + clip(req.name) + "' refused: the node has " +
+                  std::to_string(grasps_.grasps().size()) + " grasps, at most " +
+                  std::to_string(kMaxGrasps) + " (release a grasp made through ~grasp first)";
+    return true;
+  }
   GraspSource source = GraspSource::kTopic;
   try {
     if (!req.source.empty()) source = parse_grasp_source(req.source);
@@ -247,6 +401,11 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
 }
 
 bool SimNode::on_release(Release::Request& req, Release::Response& res) {
+  if (req.name.size() > kMaxNameLength) {
+    res.success = false;
+    res.message = "no grasp named '" + clip(req.name) + "'";
+    return true;
+  }
   const corde::GraspState* g = grasps_.find(req.name);
   if (waiting_to_take_hold(req.name)) {
     // A scene grasp waiting for its grasp_time: it will not take hold.
@@ -266,6 +425,7 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   end_script(req.name, "was released (~release)");
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
+  if (forget_grasp(req.name)) res.message += " (made through ~grasp: its topics end)";
   ROS_INFO("corde_sim: %s", res.message.c_str());
   guard_.mark_good(world_);
   bump_time();

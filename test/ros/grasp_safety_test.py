@@ -60,7 +60,8 @@ class GraspSafety(unittest.TestCase):
         self.assertEqual(sorted(g.names), ["gripper", "other"])
         self.assertEqual(list(g.held), [True, True])
         self.assertTrue(self.sim.release("other").success)
-        self.assertEqual(list(self.list_grasps().held), [True, False])
+        # A released grasp made through ~grasp, without a wrench, is forgotten (issue 22).
+        self.assertEqual(list(self.list_grasps().names), ["gripper"])
 
     def test_2_far_point_refused(self):
         r = self.sim.grasp("far", point=(5.0, 0.0, 1.0))

@@ -22,6 +22,16 @@ TEST(Pacer, StepsFollowScaledWallTime) {
   EXPECT_EQ(p.steps_due(10.05, 200.0, h), 0);
 }
 
+TEST(Pacer, HugeBacklogIsClampedNotOverflowed) {
+  // 3.6 s at h = 1e-300 is 3.6e300 steps: no long holds that (converting it is undefined
+  // behaviour, -2^63 on x86, which read as no step due and stopped the clock).
+  Pacer p;
+  p.reset(1.0, 0.0, 0.0);
+  EXPECT_EQ(p.steps_due(0.0, 3.6, 1e-300), Pacer::kMaxDue);
+  EXPECT_EQ(p.steps_due(0.0, 1e300, 1e-3), Pacer::kMaxDue);
+  EXPECT_EQ(p.steps_due(1e300, 0.0, 1e-3), 0);
+}
+
 TEST(Pacer, UnpacedNeverSchedules) {
   Pacer p;
   p.reset(0.0, 0.0, 0.0);
@@ -109,6 +119,18 @@ TEST(InputChecks, Poses) {
   Eigen::Quaterniond inf(INFINITY, 0, 0, 0);
   EXPECT_NE(check_pose(Eigen::Vector3d::Zero(), &inf), "");
   EXPECT_NE(check_vector(Eigen::Vector3d(0, INFINITY, 0), "force"), "");
+}
+
+TEST(InputChecks, EchoedInputsAreClipped) {
+  EXPECT_EQ(clip("short"), "short");
+  const std::string long_name(1 << 20, 'g');
+  const std::string c = clip(long_name);
+  EXPECT_EQ(c, std::string(kMaxEcho, 'g') + "... (1048576 characters)");
+  EXPECT_EQ(check_name_length(std::string(kMaxNameLength, 'a'), "grasp name"), "");
+  EXPECT_NE(check_name_length(long_name, "grasp name").find("longer than 256"), std::string::npos);
+  EXPECT_LT(check_name_length(long_name, "grasp name").size(), 200u);
+  EXPECT_TRUE(valid_frame_chars("robot/tool0.link-1"));
+  EXPECT_FALSE(valid_frame_chars("a b"));
 }
 
 TEST(InputChecks, StampAge) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -14,6 +15,42 @@ inline std::string num(double v) {
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%g", v);
   return buf;
+}
+
+// Limits on what a client may ask (docs/ros_interface.md, "Limits").
+constexpr size_t kMaxNameLength = 256;      // grasp, rod and frame names, configure keys
+constexpr size_t kMaxEcho = 100;            // characters of an input a reply or log line repeats
+constexpr size_t kMaxReply = 1000;          // characters of a service reply's message
+constexpr int kMaxGrasps = 64;              // grasps listed at once (scene and ~grasp)
+constexpr double kMaxStepSeconds = 0.1;     // wall time one step may take (configure, reset)
+constexpr long kMaxQueuedSteps = 10000000;  // ~step requests waiting to run
+constexpr double kStepCallSeconds = 0.5;    // wall time a ~step call steps before queueing the rest
+
+// An input as a reply may repeat it: at most kMaxEcho characters, then how long it was.
+inline std::string clip(const std::string& s) {
+  if (s.size() <= kMaxEcho) return s;
+  return s.substr(0, kMaxEcho) + "... (" + std::to_string(s.size()) + " characters)";
+}
+
+// A reply's message, bounded whatever it quotes.
+inline std::string clip_reply(const std::string& s) {
+  return s.size() <= kMaxReply ? s : s.substr(0, kMaxReply) + "... (truncated)";
+}
+
+// "" or why `s` cannot be a name of kind `what`: at most kMaxNameLength characters.
+inline std::string check_name_length(const std::string& s, const char* what) {
+  if (s.size() <= kMaxNameLength) return "";
+  return std::string(what) + " '" + clip(s) + "' is longer than " + std::to_string(kMaxNameLength) +
+         " characters";
+}
+
+// Characters of a tf frame id: a ROS graph name with its separators.
+inline bool valid_frame_chars(const std::string& s) {
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '-' ||
+          c == '.'))
+      return false;
+  return true;
 }
 
 // Quaternions whose norm is off by more than this are rejected; closer ones are normalised.

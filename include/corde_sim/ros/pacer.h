@@ -20,6 +20,8 @@ class Pacer {
     sim_anchor_ = sim_time;
     wall_anchor_ = wall_time;
   }
+  static constexpr long kMaxDue = 1L << 40;
+
   bool paced() const { return factor_ > 0.0; }
   double factor() const { return factor_; }
   // Whole steps of length h due at wall_time. The small tolerance keeps rounding from delaying a
@@ -28,7 +30,10 @@ class Pacer {
     if (!paced() || !(h > 0.0)) return 0;
     const double target = sim_anchor_ + factor_ * (wall_time - wall_anchor_);
     const double n = std::floor((target - sim_time) / h + 1e-6);
-    return n > 0.0 ? static_cast<long>(n) : 0;
+    // Clamped before converting: a tiny h or a long stall would not fit a long (undefined
+    // behaviour); a batch stops at its deadline long before kMaxDue steps anyway.
+    if (!(n > 0.0)) return 0;
+    return n < static_cast<double>(kMaxDue) ? static_cast<long>(n) : kMaxDue;
   }
   // Wall time at which the simulation reaches sim_time.
   double wall_at(double sim_time) const {

@@ -11,7 +11,9 @@
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <ros/spinner.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/SetBool.h>
 #include <tf2_msgs/TFMessage.h>
@@ -20,6 +22,7 @@
 
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -114,6 +117,13 @@ class SimNode {
   // Whether grasp `name` is scripted, not held and its script will still take hold (before its
   // grasp_time, or unable to take hold yet): not one its script already let go.
   bool waiting_to_take_hold(const std::string& name) const;
+  // "" or why a world whose steps cost more than kMaxStepSeconds of wall time cannot be run:
+  // estimated from the current world's step cost per element first (a hopeless request costs
+  // nothing), then measured by one step of a copy.
+  std::string check_step_cost(const corde::World& candidate) const;
+  // A released grasp made through ~grasp (not the scene's), without a wrench: its topics and its
+  // entry go. Returns whether it did.
+  bool forget_grasp(const std::string& name);
   void refresh_layout();
   void refresh_if_grasps_changed();
   void apply_inputs();
@@ -141,12 +151,19 @@ class SimNode {
   bool on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool on_step(Step::Request& req, Step::Response& res);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
+  bool grasp(Grasp::Request& req, Grasp::Response& res);  // on_grasp before bounding the reply
   bool on_release(Release::Request& req, Release::Response& res);
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
+  // dynamic_reconfigure's callback (its own thread): checks the request against the last accepted
+  // one (the reply shows what was kept) and leaves it for the loop, which applies it in
+  // apply_reconfigure().
   void on_reconfigure(NodeConfig& config, uint32_t level);
+  void apply_reconfigure();
 
   // Loop and outputs.
   void advance(double now);
+  // While paused: runs steps queued by ~step in batches, outputs between them.
+  void run_queued_steps(double now);
   // The stability guard (corde::StepGuard) checks the state after each batch of steps (and every
   // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
   // returns false while it has given up (the world then stays at its last good state).
@@ -196,6 +213,7 @@ class SimNode {
   double time_offset_ = 0.0;  // node simulation time = time_offset_ + world_.time()
   ros::Time epoch_;           // ROS time of simulation time 0 when not publishing /clock
   bool paused_ = false;
+  long queued_steps_ = 0;  // ~step's steps not run yet (only while paused)
   Pacer pacer_;
   bool markers_clear_ = true;
   double stability_margin_ = 0.0;  // h / h_crit, largest over rods
@@ -225,7 +243,16 @@ class SimNode {
   std::vector<ros::ServiceServer> services_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  // dynamic_reconfigure runs on its own queue and thread: its server writes every parameter to
+  // the master (one XMLRPC round trip each) per request, which must not stall the loop when a
+  // client sends many requests or the master is slow. Declared in this order so that the thread
+  // stops first, then the server, then the queue and the mutex go.
+  ros::CallbackQueue reconfigure_queue_;
+  std::mutex reconfigure_mutex_;
+  NodeConfig reconfigure_accepted_;   // the last accepted values (reconfigure_mutex_)
+  bool reconfigure_pending_ = false;  // not applied by the loop yet (reconfigure_mutex_)
   std::unique_ptr<dynamic_reconfigure::Server<NodeConfig>> reconfigure_;
+  std::unique_ptr<ros::AsyncSpinner> reconfigure_spinner_;
   TfFrames tf_frames_;
   RodPaths rod_paths_;
 
