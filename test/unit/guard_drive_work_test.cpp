@@ -76,6 +76,8 @@ const std::vector<DriveCase>& drive_cases() {
       {"grasp_held", "[]", "[{name: g, place: start}]", false},
       // Moving supports work on the rod.
       {"ghost_clamp_turns", "[{clamp: start, turns: 0.5, ramp_time: 0.2}, {clamp: end}]", "", true},
+      {"ghost_clamp_end_turns", "[{clamp: start}, {clamp: end, turns: -0.5, ramp_time: 0.2}]", "",
+       true},
       {"natural_clamp_turns",
        "[{clamp: start, kind: natural, turns: 0.5, ramp_time: 0.2}, {clamp: end}]", "", true},
       {"ghost_clamp_move_by_turns",
