@@ -60,6 +60,7 @@ struct RunResult {
   bool guarded = true;  // the guard ran
   bool guard_failed = false;
   long guard_rollbacks = 0;
+  double guard_work = 0.0;  // J, the guard's bound on the work done on the rods over the run
 };
 
 // The CSV header: t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw

@@ -166,8 +166,10 @@ class StepGuard {
   }
   long detections() const { return detections_; }
   long rollbacks() const { return rollbacks_; }
-  // Work bound and energy of the current window (for tests and diagnostics).
+  // Work bound of the current window, and summed over the run since reset() (the windows kept
+  // and the current one; for tests and diagnostics).
   double window_work() const { return work_; }
+  double total_work() const { return kept_work_ + work_; }
 
  private:
   bool advance(World* world, long n, bool check_at_end, const StepFn& fn);
@@ -196,6 +198,7 @@ class StepGuard {
   long since_snap_ = 0;   // user steps since the snapshot
   long since_check_ = 0;  // substeps since the last check
   double snap_energy_ = 0.0, snap_scale_ = 0.0, work_ = 0.0;
+  double kept_work_ = 0.0;    // work bound of the windows that passed since reset()
   double good_since_ = 0.0;   // world time of the last event
   double relax_after_ = 0.0;  // current wait before trying the user's setting again
   bool trial_ = false;        // running the user's setting again on trial

@@ -257,6 +257,7 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
     }
   }
   r.guard_rollbacks = guard.rollbacks();
+  r.guard_work = guard.total_work();
   r.wall_seconds = wall();
   r.sim_time = world.time();
   r.energies = world.energies();

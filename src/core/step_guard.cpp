@@ -6,6 +6,7 @@
 #include <exception>
 #include <type_traits>
 
+#include "corde_sim/energy_terms.h"
 #include "corde_sim/stability.h"
 
 namespace corde {
@@ -58,12 +59,6 @@ const char* action_text(GuardEvent::Action a) {
       break;
   }
   return "";
-}
-
-// Angle (rad) of the rotation between two unit quaternions.
-double angle_between(const Quat& a, const Quat& b) {
-  const double c = std::min(1.0, std::abs(a.coeffs().dot(b.coeffs())));
-  return 2.0 * std::acos(c);
 }
 
 }  // namespace
@@ -188,6 +183,7 @@ void StepGuard::reset(const World& world) {
   relax_after_ = settings_.relax_after;
   good_since_ = world.time();
   detections_ = rollbacks_ = 0;
+  kept_work_ = 0.0;
   mgl_ = 0.0;
   const double g = std::max(world.gravity.norm(), 1.0);
   for (const Rod& rod : world.rods()) {
@@ -213,6 +209,7 @@ void StepGuard::snapshot(const World& world, const WorldEnergies* energies) {
   const WorldEnergies e = energies ? *energies : world.energies();
   snap_energy_ = e.kinetic() + e.elastic() + e.total.gravity;
   snap_scale_ = e.kinetic() + e.elastic();
+  kept_work_ += work_;
   work_ = 0.0;
   since_snap_ = 0;
   since_check_ = 0;
@@ -278,9 +275,24 @@ void StepGuard::add_step_work(const World& world, double h) {
     for (const NodeDrive& d : rod.node_drives()) w += std::abs(d.reaction.dot(v[d.node])) * h;
     for (const SegmentDrive& d : rod.segment_drives())
       w += std::abs(d.reaction.dot(q[d.segment] * om[d.segment])) * h;
-    for (const GhostFrame* g : {&rod.ghost_start(), &rod.ghost_end()})
-      if (g->active && g->motion)
-        w += g->reaction.norm() * angle_between(ghost_frame_at(*g, t0), ghost_frame_at(*g, t1));
+    // A moving clamp's ghost frame works on its boundary element: the element's energy change
+    // from the frame's turn over the step, the rod held at its end-of-step state. Taken from the
+    // state, since only the explicit step records the element's torque (GhostFrame::reaction):
+    // under the implicit methods the torque times the turn counted nothing.
+    const int n = rod.num_segments();
+    for (int end = 0; end < 2; ++end) {
+      const GhostFrame& g = end == 0 ? rod.ghost_start() : rod.ghost_end();
+      if (!g.active || !g.motion) continue;
+      const Vec3 k(rod.section().bend, rod.section().bend, rod.section().twist);
+      const int s = end == 0 ? 0 : n - 1;
+      const double l = 0.5 * rod.rest_lengths()[s];
+      const Quat g0 = ghost_frame_at(g, t0);  // g.frame is the frame at t1
+      const double e1 = end == 0 ? bend_twist_energy(g.frame, q[s], l, k, g.uhat, nullptr, nullptr)
+                                 : bend_twist_energy(q[s], g.frame, l, k, g.uhat, nullptr, nullptr);
+      const double e0 = end == 0 ? bend_twist_energy(g0, q[s], l, k, g.uhat, nullptr, nullptr)
+                                 : bend_twist_energy(q[s], g0, l, k, g.uhat, nullptr, nullptr);
+      w += std::abs(e1 - e0);
+    }
     for (const Load& l : rod.loads()) {
       const double f = l.value.norm() * l.scale(t1);
       if (f == 0.0) continue;
