@@ -24,6 +24,7 @@ struct SceneBounds {
   static constexpr double max_torque = 1.0e12;        // N m
   static constexpr double max_modulus = 1.0e15;       // Pa: E, G, E_s
   static constexpr double max_density = 1.0e5;        // kg/m^3: rho, fluid_density
+  static constexpr double min_density = 1.0e-2;       // kg/m^3: rho
   // Stiffnesses and damping coefficients given directly (B, C, K_s, kappa, gamma_t, gamma_r) and
   // drag coefficients (linear_*, quadratic_*), in their SI units.
   static constexpr double max_coefficient = 1.0e30;

@@ -91,7 +91,11 @@ Section read_section(Map* rod) {
   if (auto v = positive_key(m, "E", kModulus, "Pa")) E = v;
   if (auto v = positive_key(m, "G", kModulus, "Pa")) G = v;
   if (auto v = positive_key(m, "E_s", kModulus, "Pa")) Es = v;
-  if (auto v = positive_key(m, "rho", SceneBounds::max_density, "kg/m^3")) rho = v;
+  if (auto v = positive_key(m, "rho", SceneBounds::max_density, "kg/m^3")) {
+    rho = v;
+    if (*v < SceneBounds::min_density)  // a near-massless rod starts at an enormous energy per mass
+      m->get("rho").fail("must be >= " + num(SceneBounds::min_density) + " kg/m^3, got " + num(*v));
+  }
   if (m) {
     if (std::optional<Value> nv = m->find("nu")) {
       const double nu = nv->number();

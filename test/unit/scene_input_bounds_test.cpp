@@ -94,6 +94,8 @@ TEST(SceneInputBounds, AbsurdValuesAreRefusedNamingTheKey) {
       {"rods.0.shape={type: helix, radius: 0.1, pitch: 0.1, turns: 1e300}", "rods[0].shape.turns"},
       {"rods.0.material.E=1e300", "rods[0].material.E"},
       {"rods.0.material.rho=1e300", "rods[0].material.rho"},
+      // A tiny density made the start's energy per mass 8e277 J/kg (a runaway at step 0).
+      {"rods.0.material.rho=1e-300", "rods[0].material.rho"},
       {"rods.0.material.B=1e300", "rods[0].material.B"},
       {"rods.0.material.damping_time=1e300", "rods[0].material.damping_time"},
       {"rods.0.drag={linear_normal: 1e300}", "rods[0].drag.linear_normal"},
