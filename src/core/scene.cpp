@@ -1,16 +1,15 @@
 #include "corde_sim/scene.h"
 
-#include <sys/stat.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <sstream>
 
 #include "corde_sim/auto_step.h"
+#include "corde_sim/file_read.h"
 #include "corde_sim/scene_statics.h"
 #include "corde_sim/stability.h"
 #include "scene_elements.h"
@@ -116,8 +115,8 @@ void read_boundary(const Value& entry, Rod* rod, Owners* owners, const std::stri
       d.kind = NodeDrive::Kind::kFixed;
     } else if (mode == "velocity") {
       d.kind = NodeDrive::Kind::kVelocity;
-      d.velocity = b.get("velocity").vec3();
-      if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+      d.velocity = b.get("velocity").vec3(SceneBounds::max_speed, "m/s");
+      if (auto t = b.find("start_time")) d.t_start = t->non_negative(SceneBounds::max_time, "s");
     } else {
       d.kind = NodeDrive::Kind::kMotion;
       d.motion = read_motion(&b, start_of(*rod, node, std::min(node, n - 1), true, false), base);
@@ -149,8 +148,10 @@ void read_boundary(const Value& entry, Rod* rod, Owners* owners, const std::stri
       d.kind = SegmentDrive::Kind::kFixed;
     } else if (mode == "spin_rate") {
       d.kind = SegmentDrive::Kind::kSpin;
-      d.rate = b.get("spin_rate").number();
-      if (auto t = b.find("start_time")) d.t_start = t->non_negative();
+      d.rate =
+          b.get("spin_rate")
+              .within(-SceneBounds::max_angular_speed, SceneBounds::max_angular_speed, "rad/s");
+      if (auto t = b.find("start_time")) d.t_start = t->non_negative(SceneBounds::max_time, "s");
     } else {
       d.kind = SegmentDrive::Kind::kMotion;
       d.motion = read_motion(&b, start_of(*rod, seg, seg, false, true), base);
@@ -229,18 +230,18 @@ void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings)
   if (m.one_of({"node", "segment"}) == "node") {
     l.kind = Load::Kind::kForce;
     l.index = read_index(m.get("node"), n + 1, "node");
-    l.value = m.get("force").vec3();
+    l.value = m.get("force").vec3(SceneBounds::max_force, "N");
     if (rod->node_drive(l.index))
       warnings->push_back(entry.path() + ": force on a driven node has no effect");
   } else {
     l.kind = Load::Kind::kTorque;
     l.index = read_index(m.get("segment"), n, "segment");
-    l.value = m.get("torque").vec3();
+    l.value = m.get("torque").vec3(SceneBounds::max_torque, "N m");
     if (rod->segment_drive(l.index))
       warnings->push_back(entry.path() + ": torque on a driven segment has no effect");
   }
-  if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative();
-  if (auto t = m.find("start_time")) l.t_start = t->non_negative();
+  if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative(SceneBounds::max_time, "s");
+  if (auto t = m.find("start_time")) l.t_start = t->non_negative(SceneBounds::max_time, "s");
   if (auto k = m.find("kind")) l.follower = k->choice({"dead", "follower"}) == "follower";
   m.finish();
   rod->add_load(l);
@@ -257,21 +258,23 @@ std::vector<Value> limited_items(const Value& list, int limit, const char* what)
 // Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
 // coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
 // q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
-// circumference).
+// circumference). Bounded (scene_bounds.h) so that these products stay finite.
 Drag read_drag(const Value& v, double radius) {
   Map m(v);
   Drag d;
-  if (auto p = m.find("linear_normal")) d.linear_normal = p->non_negative();
-  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->non_negative();
-  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->non_negative();
-  if (auto p = m.find("quadratic_tangential")) d.quadratic_tangential = p->non_negative();
+  constexpr double kMax = SceneBounds::max_coefficient;
+  if (auto p = m.find("linear_normal")) d.linear_normal = p->non_negative(kMax, "N s/m^2");
+  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->non_negative(kMax, "N s/m^2");
+  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->non_negative(kMax, "N s^2/m^3");
+  if (auto p = m.find("quadratic_tangential"))
+    d.quadratic_tangential = p->non_negative(kMax, "N s^2/m^3");
   if (auto rho = m.find("fluid_density")) {
     if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
       rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
-    const double density = rho->non_negative();
+    const double density = rho->non_negative(SceneBounds::max_density, "kg/m^3");
     double cd = 1.2, cf = 0.0;
-    if (auto p = m.find("drag_coefficient")) cd = p->non_negative();
-    if (auto p = m.find("friction_coefficient")) cf = p->non_negative();
+    if (auto p = m.find("drag_coefficient")) cd = p->non_negative(SceneBounds::max_factor, "");
+    if (auto p = m.find("friction_coefficient")) cf = p->non_negative(SceneBounds::max_factor, "");
     d.quadratic_normal = density * cd * radius;
     d.quadratic_tangential = density * cf * M_PI * radius;
   } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
@@ -298,6 +301,7 @@ void read_inertia_scale(const Value& v, Rod* rod, std::vector<std::string>* note
     scale = v.number();
     if (!(scale >= 1.0))
       v.fail("must be >= 1 (1 = physical rotary inertia) or auto, got " + num(scale));
+    v.within(1.0, SceneBounds::max_factor, "");
   }
   rod->set_rotational_inertia_scale(scale);
 }
@@ -346,6 +350,14 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
     rod = &scene->world.add_rod(build_rod(spec));
   } catch (const std::invalid_argument& e) {
     throw SceneError(v.path() + ".shape: " + e.what());
+  }
+  {
+    double length = 0.0;
+    for (double l : rod->rest_lengths()) length += l;
+    if (!(length >= SceneBounds::min_length && length <= SceneBounds::max_length))
+      m.get("shape").fail("the rod's length " + num(length) + " m is outside " +
+                          num(SceneBounds::min_length) + " .. " + num(SceneBounds::max_length) +
+                          " m");
   }
   if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
   if (auto c = m.find("contact")) scene_detail::read_rod_contact(*c, &rod->contact_options());
@@ -423,9 +435,9 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
     }
   }
   if (auto p = m.find("hold_orientation")) g.hold_orientation = p->boolean();
-  if (auto p = m.find("grasp_time")) g.grasp_time = p->non_negative();
+  if (auto p = m.find("grasp_time")) g.grasp_time = p->non_negative(SceneBounds::max_time, "s");
   if (auto p = m.find("release_time")) {
-    g.release_time = p->non_negative();
+    g.release_time = p->non_negative(SceneBounds::max_time, "s");
     if (!(g.release_time > g.grasp_time))
       p->fail(num(g.release_time) + " s is not after grasp_time " + num(g.grasp_time) +
               " s: a grasp lets go after it takes hold");
@@ -515,7 +527,8 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
   YAML::Node root;
   // yaml-cpp takes a lone CR for an ordinary character (the whole file would be one line); YAML
   // reads it as a line break, and so do we.
-  std::string text = yaml_text;
+  // A UTF-8 byte order mark (as some editors write) is not part of the text.
+  std::string text = yaml_text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? yaml_text.substr(3) : yaml_text;
   for (size_t i = 0; i < text.size(); ++i)
     if (text[i] == '\r' && (i + 1 == text.size() || text[i + 1] != '\n')) text[i] = '\n';
   try {
@@ -560,7 +573,8 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   Map top(Value(root, ""));
   if (auto v = top.find("name")) scene.name = v->string();
   if (auto v = top.find("description")) scene.description = v->string();
-  if (auto v = top.find("gravity")) scene.world.gravity = v->vec3();
+  if (auto v = top.find("gravity"))
+    scene.world.gravity = v->vec3(SceneBounds::max_acceleration, "m/s^2");
   scene.world.integrator = kDefaultIntegrator;
   bool integrator_auto = false;
   if (auto v = top.find("integrator")) {
@@ -569,11 +583,12 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
     integrator_auto = name == "auto";
     if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
   }
-  if (auto v = top.find("duration")) scene.duration = v->positive();
+  if (auto v = top.find("duration")) scene.duration = v->positive(SceneBounds::max_time, "s");
   if (auto v = top.find("mode"))
     scene.mode = v->choice({"dynamics", "statics"}) == "statics" ? Scene::Mode::kStatics
                                                                  : Scene::Mode::kDynamics;
-  if (auto v = top.find("statics_time")) scene.statics_time = v->non_negative();
+  if (auto v = top.find("statics_time"))
+    scene.statics_time = v->non_negative(SceneBounds::max_time, "s");
   if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
     v->positive();
     scene.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
@@ -601,7 +616,12 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   for (size_t i = 0; i < items.size(); ++i)
     read_rod(items[i], static_cast<int>(i), &scene, &entries, base, default_state);
   if (auto c = top.find("contact")) scene_detail::read_contact_settings(*c, &scene.world.contact);
-  if (auto o = top.find("obstacles")) scene_detail::read_obstacles(*o, &scene.world, base);
+  if (auto o = top.find("obstacles")) {
+    std::vector<std::string> obstacle_paths, rod_paths;
+    scene_detail::read_obstacles(*o, &scene.world, base, &obstacle_paths);
+    for (const RodEntry& e : entries) rod_paths.push_back(e.path);
+    scene_detail::check_obstacles_at_start(scene.world, obstacle_paths, rod_paths);
+  }
   if (auto g = top.find("grasps")) {
     std::map<std::string, std::string> names;
     for (const Value& item : limited_items(*g, SceneLimits::max_grasps, "grasps")) {
@@ -653,20 +673,13 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
 }  // namespace
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  struct stat st;
-  if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
-    throw SceneError(path + ": is a directory, not a scene file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot open the file");
-  // Read at most one byte past the limit: /dev/zero or a huge file must not be read whole.
-  const size_t limit = SceneLimits::max_file_bytes;
-  std::string text(limit + 1, '\0');
-  in.read(&text[0], static_cast<std::streamsize>(text.size()));
-  if (in.bad()) throw SceneError(path + ": cannot read the file");
-  text.resize(static_cast<size_t>(in.gcount()));
-  if (text.size() > limit)
-    throw SceneError(path + ": larger than the limit of " + std::to_string(limit) +
-                     " bytes for a scene file");
+  // A regular file within the size limit only: a FIFO would block, a device never end.
+  std::string text;
+  try {
+    text = read_input_file(path, "scene file", SceneLimits::max_file_bytes);
+  } catch (const FileError& e) {
+    throw SceneError(e.what());
+  }
   return parse_scene(text, overrides, path);
 }
 

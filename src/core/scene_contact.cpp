@@ -1,5 +1,6 @@
 // Scene keys for contacts: obstacles (primitives and URDF files, fixed or keyframed), the solver's
 // settings and each rod's contact options (docs/scene_format.md, "Obstacles and contacts").
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -15,7 +16,7 @@ namespace {
 // yaw about fixed x, y, z, as in URDF); a plane may give its `normal` instead.
 Eigen::Isometry3d read_pose(Map* m, bool normal_ok) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  if (auto p = m->find("position")) pose.translation() = p->vec3();
+  if (auto p = m->find("position")) pose.translation() = p->vec3(SceneBounds::max_length, "m");
   int given = m->has("orientation") + m->has("rpy") + (normal_ok && m->has("normal"));
   if (given > 1)
     m->fail(normal_ok ? "give one of orientation, rpy or normal"
@@ -121,20 +122,28 @@ std::map<std::string, std::shared_ptr<const Motion>> read_joint_motions(
 
 }  // namespace
 
-void read_obstacles(const Value& list, World* world, const std::string& base) {
+void read_obstacles(const Value& list, World* world, const std::string& base,
+                    std::vector<std::string>* paths) {
   if (!list.is_sequence()) list.fail("expected a list of obstacles, got " + list.describe());
   if (list.node().size() > static_cast<size_t>(SceneLimits::max_items))
     list.fail("has " + std::to_string(list.node().size()) + " obstacles, more than the limit of " +
               std::to_string(SceneLimits::max_items));
   if (!world->obstacles) world->obstacles = std::make_shared<ObstacleSet>();
+  // The entry of each obstacle added (a URDF adds several).
+  std::string last;
+  auto note = [&] {
+    if (paths) paths->resize(static_cast<size_t>(world->obstacles->size()), last);
+  };
   int index = 0;
   for (const Value& item : list.items()) {
+    note();
+    last = item.path();
     Map m(item);
     const std::string name =
         m.has("name") ? m.get("name").string() : "obstacle" + std::to_string(index);
     ++index;
     double friction = 0.5;
-    if (auto f = m.find("friction")) friction = f->non_negative();
+    if (auto f = m.find("friction")) friction = f->non_negative(SceneBounds::max_factor, "");
     bool moving = false;
     std::optional<Value> moving_key = m.find("moving");
     if (moving_key) moving = moving_key->boolean();
@@ -233,14 +242,15 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
     } else if (type == "box") {
       o.shape.kind = K::kBox;
       const Value size = m.get("size");
-      o.shape.size = size.vec3();
+      o.shape.size = size.vec3(SceneBounds::max_length, "m");
       if (!(o.shape.size.minCoeff() > 0.0)) size.fail("every side must be > 0");
     } else {
       o.shape.kind = type == "sphere"     ? K::kSphere
                      : type == "cylinder" ? K::kCylinder
                                           : K::kCapsule;
-      o.shape.size.x() = m.get("radius").positive();
-      if (type != "sphere") o.shape.size.y() = m.get("length").positive();
+      o.shape.size.x() = m.get("radius").positive(SceneBounds::max_length, "m");
+      if (type != "sphere")
+        o.shape.size.y() = m.get("length").positive(SceneBounds::max_length, "m");
     }
     const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, o.pose, base);
     o.moving = moving || keyframed(motion != nullptr);
@@ -254,19 +264,65 @@ void read_obstacles(const Value& list, World* world, const std::string& base) {
       world->obstacle_motions.push_back(std::move(om));
     }
   }
+  note();
+}
+
+void check_obstacles_at_start(const World& world, const std::vector<std::string>& obstacle_paths,
+                              const std::vector<std::string>& rod_paths) {
+  if (!world.obstacles || world.obstacles->size() == 0) return;
+  // Every obstacle as placed (URDF links too, posed through their chains): far beyond the bounds
+  // of the scene's keys, the geometry queries fail ("too many iterations in Jacobi transform").
+  for (int i = 0; i < world.obstacles->size(); ++i) {
+    const Obstacle& o = world.obstacles->obstacle(i);
+    const double far =
+        std::max(o.pose.translation().cwiseAbs().maxCoeff(), o.shape.size.cwiseAbs().maxCoeff());
+    if (!(far <= SceneBounds::max_placed_length))
+      throw SceneError((static_cast<size_t>(i) < obstacle_paths.size() ? obstacle_paths[i]
+                                                                       : std::string("obstacles")) +
+                       ": obstacle '" + o.name + "' has a position or size of " + num(far) +
+                       " m, beyond " + num(SceneBounds::max_placed_length) + " m");
+  }
+  std::vector<SegmentContact> found;
+  std::vector<int> which;
+  for (size_t r = 0; r < world.rods().size(); ++r) {
+    const Rod& rod = world.rods()[r];
+    if (!rod.contact_options().obstacles) continue;
+    const double radius = rod.section().radius;
+    const auto& x = rod.positions();
+    double worst = 0.01 * radius;  // touching, within 1% of the radius, is a start on the surface
+    int seg = -1, obstacle = -1;
+    for (int s = 0; s < rod.num_segments(); ++s) {
+      found.clear();
+      which.clear();
+      world.obstacles->query(x[s], x[s + 1], radius, &found, &which);
+      for (size_t k = 0; k < found.size(); ++k)
+        if (radius - found[k].distance > worst)
+          worst = radius - found[k].distance, seg = s, obstacle = which[k];
+    }
+    if (obstacle < 0) continue;
+    const std::string entry =
+        static_cast<size_t>(obstacle) < obstacle_paths.size() ? obstacle_paths[obstacle] : "";
+    throw SceneError(rod_paths[r] + ": rod '" + rod.name() + "' starts inside obstacle '" +
+                     world.obstacles->obstacle(obstacle).name + "'" +
+                     (entry.empty() ? "" : " (" + entry + ")") + ": segment " +
+                     std::to_string(seg) + " is " + num(worst) + " m deep (radius " + num(radius) +
+                     " m; a start touching within 1% of the radius is accepted); "
+                     "move the rod or the obstacle");
+  }
 }
 
 void read_contact_settings(const Value& v, ContactSettings* s) {
   Map m(v);
   if (auto p = m.find("iterations")) s->iterations = p->integer(1, 10000);
   if (auto p = m.find("implicit_sweeps")) s->implicit_sweeps = p->integer(1, 10000);
-  if (auto p = m.find("friction")) s->friction = p->non_negative();
-  if (auto p = m.find("skin")) s->skin = p->non_negative();
+  if (auto p = m.find("friction")) s->friction = p->non_negative(SceneBounds::max_factor, "");
+  if (auto p = m.find("skin")) s->skin = p->non_negative(SceneBounds::max_skin, "");
   if (auto p = m.find("push_out")) {
     s->push_out = p->non_negative();
     if (s->push_out > 1.0) p->fail("must be <= 1");
   }
-  if (auto p = m.find("max_push_speed")) s->max_push_speed = p->non_negative();
+  if (auto p = m.find("max_push_speed"))
+    s->max_push_speed = p->non_negative(SceneBounds::max_speed, "m/s");
   if (auto p = m.find("surface_friction")) s->surface_friction = p->boolean();
   if (auto p = m.find("rolling_friction")) {
     s->rolling_friction = p->non_negative();
@@ -280,7 +336,7 @@ void read_rod_contact(const Value& v, ContactOptions* o) {
   if (auto p = m.find("self")) o->self = p->boolean();
   if (auto p = m.find("rods")) o->rods = p->boolean();
   if (auto p = m.find("obstacles")) o->obstacles = p->boolean();
-  if (auto p = m.find("friction")) o->friction = p->non_negative();
+  if (auto p = m.find("friction")) o->friction = p->non_negative(SceneBounds::max_factor, "");
   m.finish();
 }
 

@@ -23,15 +23,16 @@ const MaterialPreset& find_preset(const Value& v) {
   }
 }
 
-std::optional<double> positive_key(Map* m, const char* key) {
+// Keys of the material map, at most `hi` (scene_bounds.h) in `unit`.
+std::optional<double> positive_key(Map* m, const char* key, double hi, const char* unit) {
   if (!m) return std::nullopt;
-  if (std::optional<Value> v = m->find(key)) return v->positive();
+  if (std::optional<Value> v = m->find(key)) return v->positive(hi, unit);
   return std::nullopt;
 }
 
-std::optional<double> non_negative_key(Map* m, const char* key) {
+std::optional<double> non_negative_key(Map* m, const char* key, double hi, const char* unit) {
   if (!m) return std::nullopt;
-  if (std::optional<Value> v = m->find(key)) return v->non_negative();
+  if (std::optional<Value> v = m->find(key)) return v->non_negative(hi, unit);
   return std::nullopt;
 }
 
@@ -57,7 +58,9 @@ Section read_section(Map* rod) {
   }
   double radius = 0.0;
   if (std::optional<Value> r = rod->find("radius")) {
-    radius = r->positive();
+    radius = r->positive(SceneBounds::max_length, "m");
+    if (radius < SceneBounds::min_length)
+      r->fail("must be >= " + num(SceneBounds::min_length) + " m, got " + num(radius));
   } else if (preset) {
     radius = preset->radius;
   } else {
@@ -84,10 +87,15 @@ Section read_section(Map* rod) {
   if (m && ((m->has("G") ? 1 : 0) + (m->has("nu") ? 1 : 0) + (m->has("C") ? 1 : 0)) > 1)
     m->fail("give only one of G, nu and C");
 
-  if (auto v = positive_key(m, "E")) E = v;
-  if (auto v = positive_key(m, "G")) G = v;
-  if (auto v = positive_key(m, "E_s")) Es = v;
-  if (auto v = positive_key(m, "rho")) rho = v;
+  constexpr double kModulus = SceneBounds::max_modulus, kCoef = SceneBounds::max_coefficient;
+  if (auto v = positive_key(m, "E", kModulus, "Pa")) E = v;
+  if (auto v = positive_key(m, "G", kModulus, "Pa")) G = v;
+  if (auto v = positive_key(m, "E_s", kModulus, "Pa")) Es = v;
+  if (auto v = positive_key(m, "rho", SceneBounds::max_density, "kg/m^3")) {
+    rho = v;
+    if (*v < SceneBounds::min_density)  // a near-massless rod starts at an enormous energy per mass
+      m->get("rho").fail("must be >= " + num(SceneBounds::min_density) + " kg/m^3, got " + num(*v));
+  }
   if (m) {
     if (std::optional<Value> nv = m->find("nu")) {
       const double nu = nv->number();
@@ -96,13 +104,15 @@ Section read_section(Map* rod) {
       G = *E / (2.0 * (1.0 + nu));
     }
   }
-  const std::optional<double> B = positive_key(m, "B"), C = positive_key(m, "C"),
-                              Ks = positive_key(m, "K_s");
-  const std::optional<double> kappa = positive_key(m, "kappa");
-  const std::optional<double> gamma_t = non_negative_key(m, "gamma_t");
-  const std::optional<double> gamma_r = non_negative_key(m, "gamma_r");
-  const std::optional<double> tau = non_negative_key(m, "damping_time");
-  const std::optional<double> max_strain = non_negative_key(m, "max_strain");
+  const std::optional<double> B = positive_key(m, "B", kCoef, "N m^2"),
+                              C = positive_key(m, "C", kCoef, "N m^2"),
+                              Ks = positive_key(m, "K_s", kCoef, "N");
+  const std::optional<double> kappa = positive_key(m, "kappa", kCoef, "N");
+  const std::optional<double> gamma_t = non_negative_key(m, "gamma_t", kCoef, "N s");
+  const std::optional<double> gamma_r = non_negative_key(m, "gamma_r", kCoef, "N m^2 s");
+  const std::optional<double> tau = non_negative_key(m, "damping_time", SceneBounds::max_time, "s");
+  const std::optional<double> max_strain =
+      non_negative_key(m, "max_strain", SceneBounds::max_factor, "");
   if (m) m->finish();
 
   const double area = kPi * radius * radius;
@@ -134,21 +144,22 @@ RodShape read_shape(const Value& v) {
   Map m(v);
   RodShape s;
   const std::string type = m.get("type").choice({"straight", "helix", "polyline"});
-  if (auto p = m.find("start")) s.start = p->vec3();
+  constexpr double kLength = SceneBounds::max_length;
+  if (auto p = m.find("start")) s.start = p->vec3(kLength, "m");
   if (type == "straight") {
     s.kind = RodShape::Kind::kStraight;
     if (auto p = m.find("direction")) s.direction = p->nonzero_vec3();
-    if (auto p = m.find("length")) s.length = p->positive();
+    if (auto p = m.find("length")) s.length = p->positive(kLength, "m");
   } else if (type == "helix") {
     s.kind = RodShape::Kind::kHelix;
     s.direction = Vec3::UnitZ();
     if (auto p = m.find("axis")) s.direction = p->nonzero_vec3();
-    s.helix_radius = m.get("radius").positive();
-    s.helix_pitch = m.get("pitch").non_negative();
+    s.helix_radius = m.get("radius").positive(kLength, "m");
+    s.helix_pitch = m.get("pitch").non_negative(kLength, "m");
     const std::string count = m.one_of({"turns", "length"});
     const double per_turn = std::hypot(2.0 * kPi * s.helix_radius, s.helix_pitch);
-    s.helix_turns =
-        count == "turns" ? m.get("turns").positive() : m.get("length").positive() / per_turn;
+    s.helix_turns = count == "turns" ? m.get("turns").positive(SceneBounds::max_factor, "")
+                                     : m.get("length").positive(kLength, "m") / per_turn;
   } else {
     s.kind = RodShape::Kind::kPolyline;
     if (m.has("start")) m.fail("a polyline has no 'start'; its first point is the start");
@@ -156,7 +167,7 @@ RodShape read_shape(const Value& v) {
     const std::vector<Value> items = pts.items();
     if (items.size() < 2) pts.fail("needs at least 2 points, got " + std::to_string(items.size()));
     for (size_t i = 0; i < items.size(); ++i) {
-      s.points.push_back(items[i].vec3());
+      s.points.push_back(items[i].vec3(kLength, "m"));
       if (i > 0 && (s.points[i] - s.points[i - 1]).norm() < 1e-12)
         items[i].fail("repeats the previous point");
     }

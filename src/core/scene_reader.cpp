@@ -24,7 +24,10 @@ std::string echo(const std::string& text) {
 }
 
 void Value::fail(const std::string& reason) const {
-  std::string msg = (path_.empty() ? std::string("scene") : path_) + ": " + reason;
+  const std::string head = (path_.empty() ? std::string("scene") : path_) + ": ";
+  // A message passed on from a nested error may already name this key (and its line).
+  if (reason.compare(0, head.size(), head) == 0) throw SceneError(reason);
+  std::string msg = head + reason;
   const YAML::Mark mark = node_.IsDefined() ? node_.Mark() : YAML::Mark::null_mark();
   if (mark.line >= 0) msg += " (line " + std::to_string(mark.line + 1) + ")";
   throw SceneError(msg);
@@ -61,6 +64,31 @@ double Value::non_negative() const {
   return v;
 }
 
+namespace {
+std::string with_unit(double v, const char* unit) {
+  return num(v) + (unit && *unit ? std::string(" ") + unit : std::string());
+}
+}  // namespace
+
+double Value::within(double lo, double hi, const char* unit) const {
+  const double v = number();
+  if (v > hi) fail("must be <= " + with_unit(hi, unit) + ", got " + num(v));
+  if (v < lo) fail("must be >= " + with_unit(lo, unit) + ", got " + num(v));
+  return v;
+}
+
+double Value::positive(double hi, const char* unit) const {
+  const double v = positive();
+  if (v > hi) fail("must be <= " + with_unit(hi, unit) + ", got " + num(v));
+  return v;
+}
+
+double Value::non_negative(double hi, const char* unit) const {
+  const double v = non_negative();
+  if (v > hi) fail("must be <= " + with_unit(hi, unit) + ", got " + num(v));
+  return v;
+}
+
 int Value::integer(int lo, int hi) const {
   const double v = number();
   if (v != std::floor(v)) fail("expected an integer, got " + describe());
@@ -87,6 +115,14 @@ Vec3 Value::vec3() const {
   if (!is_sequence() || node_.size() != 3) fail("expected [x, y, z], got " + describe());
   const std::vector<Value> v = items();
   return Vec3(v[0].number(), v[1].number(), v[2].number());
+}
+
+Vec3 Value::vec3(double hi, const char* unit) const {
+  const Vec3 v = vec3();
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(v[k]) > hi)
+      fail("each component must be within +-" + with_unit(hi, unit) + ", got " + num(v[k]));
+  return v;
 }
 
 Quat Value::quaternion() const {

@@ -16,6 +16,7 @@
 #include "corde_sim/rod.h"
 #include "corde_sim/rod_shape.h"
 #include "corde_sim/scene.h"
+#include "corde_sim/scene_bounds.h"
 #include "corde_sim/world.h"
 
 namespace corde {
@@ -45,10 +46,17 @@ class Value {
   double number() const;  // finite
   double positive() const;
   double non_negative() const;
+  // Bounded numbers (scene_bounds.h): fail naming the bound and its unit ("must be <= 10000 m,
+  // got 1e+300").
+  double within(double lo, double hi, const char* unit) const;
+  double positive(double hi, const char* unit) const;      // in (0, hi]
+  double non_negative(double hi, const char* unit) const;  // in [0, hi]
   int integer(int lo, int hi) const;  // fails naming the range when outside [lo, hi]
   bool boolean() const;
   std::string string() const;
   Vec3 vec3() const;
+  // [x, y, z] with every component in [-hi, hi].
+  Vec3 vec3(double hi, const char* unit) const;
   // [x, y, z, w], of unit norm to 1e-6; normalised.
   Quat quaternion() const;
   // A direction: scaled so that its largest component is +-1 (the norm of [1e200, 0, 0] would
@@ -116,7 +124,15 @@ void read_initial(const Value& v, Rod* rod);
 
 // The top-level `obstacles` list into world->obstacles (URDF files relative to `base`), the
 // top-level `contact` settings, and a rod's `contact` options (scene_contact.cpp).
-void read_obstacles(const Value& list, World* world, const std::string& base);
+// `paths` (optional) receives the entry's path ("obstacles[2]") of each obstacle added.
+void read_obstacles(const Value& list, World* world, const std::string& base,
+                    std::vector<std::string>* paths = nullptr);
+// Refuses an obstacle placed beyond SceneBounds::max_placed_length (naming its entry), and a rod
+// with obstacle contact whose axis starts deeper inside an obstacle than 1% of its radius (naming
+// rods[i], the obstacle, the segment and the depth): the contact would throw it out at a runaway
+// speed. `obstacle_paths` from read_obstacles(), `rod_paths` per rod.
+void check_obstacles_at_start(const World& world, const std::vector<std::string>& obstacle_paths,
+                              const std::vector<std::string>& rod_paths);
 void read_contact_settings(const Value& v, ContactSettings* settings);
 void read_rod_contact(const Value& v, ContactOptions* options);
 

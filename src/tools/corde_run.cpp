@@ -51,7 +51,8 @@ const char* kUsage =
     "exit status: 0 done (the guard may have recovered: see stderr and the summary),\n"
     "  1 bad scene or file, or one statics cannot handle, 2 bad usage, 3 the run blew up\n"
     "  (runaway checks, --no-guard), 4 statics found no equilibrium, 5 the guard could not\n"
-    "  recover (the run stopped at the last good state)\n";
+    "  recover (the run stopped at the last good state), 6 internal error (an unexpected\n"
+    "  exception, e.g. out of memory; the message says what)\n";
 
 int usage_error(const std::string& msg) {
   std::fprintf(stderr, "corde_run: %s\n%s", msg.c_str(), kUsage);
@@ -98,9 +99,27 @@ int run_statics(corde::Scene* scene, const std::string& scene_path, bool quiet,
   return 0;
 }
 
+int run(int argc, char** argv);
+
 }  // namespace
 
+// Any exception that escapes is reported as corde_run's own error (status 6), never an abort.
 int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "corde_run: internal error: %s\n", e.what());
+  } catch (...) {
+    std::fflush(stdout);
+    std::fprintf(stderr, "corde_run: internal error: an unknown exception\n");
+  }
+  return 6;
+}
+
+namespace {
+
+int run(int argc, char** argv) {
   std::string scene_path, out_path, reactions_path, energies_path;
   std::vector<std::string> overrides;
   int every = 0;
@@ -278,3 +297,5 @@ int main(int argc, char** argv) {
   }
   return 0;
 }
+
+}  // namespace

@@ -1,6 +1,7 @@
 #!/bin/bash
 # The scene reader's libFuzzer target: builds it with clang++ (the main build may use g++) and runs
-# it briefly over the seed corpus (test/fuzz/corpus/ and config/scenes/).
+# it briefly over the seed corpus (test/fuzz/corpus/ and config/scenes/), with test/fuzz/fixtures/
+# as the fuzzed scenes' folder (a URDF, a mesh and keyframe files they can name).
 #   run_fuzz_short.sh SOURCE_DIR WORK_DIR [SECONDS]   build if needed, then fuzz (default 20 s)
 #   run_fuzz_short.sh SOURCE_DIR WORK_DIR --build     build only (exit 0 when skipped)
 # Exits 77 (ctest: skipped) when no clang++ builds with -fsanitize=fuzzer; scripts/install_deps.sh
@@ -56,6 +57,7 @@ fi
 
 # New inputs go to the work folder; the seed folders are only read. A crash, a sanitizer report,
 # an input slower than 60 s or above 2 GB fails the test and leaves the input in WORK_DIR.
+export CORDE_FUZZ_FIXTURES="$src/test/fuzz/fixtures"
 exec "$bin" -max_total_time="$arg" -max_len=4096 -timeout=60 -rss_limit_mb=2048 \
   -dict="$src/test/fuzz/scene.dict" -artifact_prefix="$work/" -print_final_stats=1 \
   "$work/new_inputs" "$src/test/fuzz/corpus" "$src/config/scenes"

@@ -3,6 +3,7 @@
 // (-fsanitize=fuzzer,address,undefined) by run_fuzz_short.sh; see test/fuzz/README.md.
 #include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -24,8 +25,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       start = end + 1;
     }
   }
+  // The scene's folder is the fixture folder (CORDE_FUZZ_FIXTURES, set by run_fuzz_short.sh), so
+  // that fuzzed scenes reach its URDF, mesh and keyframe files by relative names.
+  static const std::string source = [] {
+    const char* dir = std::getenv("CORDE_FUZZ_FIXTURES");
+    return std::string(dir && *dir ? dir : "test/fuzz/fixtures") + "/fuzzed.yaml";
+  }();
   try {
-    const corde::Scene scene = corde::parse_scene(text, overrides);
+    const corde::Scene scene = corde::parse_scene(text, overrides, source);
   } catch (const corde::SceneError&) {
   }
   return 0;

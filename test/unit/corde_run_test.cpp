@@ -213,6 +213,17 @@ rods:
   EXPECT_EQ(corde_run(kScene, "--statics --at -1", "at_neg").status, 2);
   EXPECT_EQ(corde_run(kScene, "--dynamics --at 1", "at_both").status, 2);
 }
+// Values whose product overflows (the drag of a fluid) aborted corde_run (exit 134, an uncaught
+// std::invalid_argument): a scene error now, exit 1, naming the key.
+TEST(CordeRunErrors, AbsurdDragIsABadSceneNotAnAbort) {
+  for (const char* drag : {"{fluid_density: 1000, friction_coefficient: 1e308}",
+                           "{fluid_density: 1e308, drag_coefficient: 10}"}) {
+    const ToolRun r = corde_run(kScene, std::string("--set 'rods.0.drag=") + drag + "'", "drag");
+    EXPECT_EQ(r.status, 1) << r.output;
+    EXPECT_NE(r.output.find("corde_run: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("rods[0].drag."), std::string::npos) << r.output;
+  }
+}
 #endif
 
 }  // namespace

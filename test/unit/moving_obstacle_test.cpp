@@ -457,7 +457,7 @@ TEST(MovingObstacles, SceneKeyErrors) {
   };
   const std::string ball = "{name: b, type: sphere, radius: 0.1, ";
   expect(ball + "keyframes: [{time: 1, position: [0, 0, 1]}, {time: 0.5}]}",
-         "obstacles[0].keyframes: keyframe 1: times must increase strictly");
+         "obstacles[0].keyframes[1]: times must increase strictly");
   expect(ball + "move_by: [1, 0, 0]}", "obstacles[0].ramp_time: missing");
   expect(ball + "move_by: [1, 0, 0], ramp_time: 0}", "obstacles[0].ramp_time: ");
   expect(ball + "keyframes: [{time: 1, velocity: [1, 0, 0]}]}",
@@ -473,7 +473,7 @@ TEST(MovingObstacles, SceneKeyErrors) {
          "obstacles[0].moving: false, but the obstacle is keyframed");
   expect(ball + "start_time: 1}", "obstacles[0].start_time: unknown key");
   expect(ball + "keyframes: {file: no_such_file.csv}}",
-         "obstacles[0].keyframes: cannot open the keyframe file");
+         "obstacles[0].keyframes: no_such_file.csv: cannot open the keyframe file");
   expect("{name: robot, urdf: no_such.urdf, keyframes: [{time: 1, turns: 1}], interpolation: x}",
          "obstacles[0].interpolation: ");
 }

@@ -83,7 +83,7 @@ TEST(SceneMotion, AbsoluteKeyframesAreRelativeToTheStart) {
 TEST(SceneMotion, MalformedKeysNameTheirPath) {
   const std::string b = "rods[0].boundary[0]";
   expect_error(scene("      - {node: 0, keyframes: [{time: 0.2}, {time: 0.1}]}\n"),
-               b + ".keyframes", "times must increase");
+               b + ".keyframes[1]", "times must increase");
   expect_error(scene("      - {node: 0, keyframes: [{time: 0.2, turns: 1}]}\n"),
                b + ".keyframes[0].turns", "unknown key");
   expect_error(scene("      - {node: 0, keyframes: [{tim: 0.2}]}\n"), b + ".keyframes[0].time",
@@ -110,8 +110,8 @@ TEST(SceneMotion, MalformedKeysNameTheirPath) {
                b + ".slide", "cannot also be moved");
   expect_error(scene("      - {clamp: end, interpolation: cubic, turns: 1, ramp_time: 1}\n"),
                b + ".interpolation", "smooth");
-  expect_error(scene("      - {clamp: end, keyframes: [{time: 0, turns: 1}]}\n"), b + ".keyframes",
-               "start pose");
+  expect_error(scene("      - {clamp: end, keyframes: [{time: 0, turns: 1}]}\n"),
+               b + ".keyframes[0]", "start pose");
   expect_error(scene("      - {clamp: end, keyframes: {file: missing.csv}}\n"), b + ".keyframes",
                "cannot open");
   expect_error(scene("      - {node: 0, fix: true}\n    loads:\n      - {node: 3, force: [1, 0, "
