@@ -128,6 +128,13 @@ fs::path find_package_dir(const std::string& pkg, const fs::path& start) {
   return {};
 }
 
+// "x y z" for messages (Eigen's stream output pads columns).
+std::string xyz_text(const Vec3& v) {
+  std::ostringstream s;
+  s << v.x() << " " << v.y() << " " << v.z();
+  return s.str();
+}
+
 fs::path resolve_mesh(const std::string& uri, const fs::path& base, const std::string& where) {
   try {
     return resolve_resource_path(uri, base.string());
@@ -207,8 +214,8 @@ TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale) {
       // t = 0 in the collision queries instead.
       if (!(x.allFinite() && x.cwiseAbs().maxCoeff() <= SceneLimits::max_length)) {
         std::ostringstream msg;
-        msg << "mesh file '" << path << "' with mesh scale " << scale.transpose() << ": vertex "
-            << v << " at (" << x.transpose() << ") is beyond " << SceneLimits::max_length
+        msg << "mesh file '" << path << "' with mesh scale " << xyz_text(scale) << ": vertex " << v
+            << " at (" << xyz_text(x) << ") is beyond " << SceneLimits::max_length
             << " m (or not finite)";
         throw std::runtime_error(msg.str());
       }
@@ -247,7 +254,7 @@ void check_joint(const urdf::Joint& joint, const std::string& doc) {
   if (!(xyz.allFinite() && xyz.cwiseAbs().maxCoeff() <= SceneLimits::max_length &&
         std::isfinite(r.x) && std::isfinite(r.y) && std::isfinite(r.z) && std::isfinite(r.w))) {
     std::ostringstream msg;
-    msg << doc << ": joint '" << joint.name << "': origin xyz (" << xyz.transpose() << ") beyond "
+    msg << doc << ": joint '" << joint.name << "': origin xyz (" << xyz_text(xyz) << ") beyond "
         << SceneLimits::max_length << " m or not finite";
     throw std::runtime_error(msg.str());
   }
@@ -328,7 +335,7 @@ std::vector<UrdfCollision> collisions_of(const urdf::ModelInterface& model, cons
       if (!(ob.pose.matrix().allFinite() &&
             ob.pose.translation().cwiseAbs().maxCoeff() <= SceneLimits::max_length)) {
         std::ostringstream msg;
-        msg << where << ": placed at (" << ob.pose.translation().transpose() << "), beyond "
+        msg << where << ": placed at (" << xyz_text(ob.pose.translation()) << "), beyond "
             << SceneLimits::max_length << " m from the root link (or not finite)";
         throw std::runtime_error(msg.str());
       }
