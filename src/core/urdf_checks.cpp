@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <locale>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -112,6 +113,12 @@ void check_collision(const XMLElement& col, const std::string& where) {
 // (walked once per parent, a lattice of such links exponentially often) and cycles of joints
 // (whose links it then leaks, holding each other).
 void check_tree(const XMLElement& robot, const std::string& doc) {
+  // (Checked here rather than left to urdfdom, which would fail half-way through linking a
+  // long chain and then destroy it recursively.)
+  std::set<std::string> links;
+  for (const XMLElement* link = robot.FirstChildElement("link"); link;
+       link = link->NextSiblingElement("link"))
+    if (link->Attribute("name")) links.insert(link->Attribute("name"));
   std::map<std::string, std::string> parent_joint, parent_link;  // by child link
   for (const XMLElement* joint = robot.FirstChildElement("joint"); joint;
        joint = joint->NextSiblingElement("joint")) {
@@ -121,6 +128,10 @@ void check_tree(const XMLElement& robot, const std::string& doc) {
     if (!name || !parent || !child || !parent->Attribute("link") || !child->Attribute("link"))
       continue;  // urdfdom refuses it with its own message
     const std::string c = child->Attribute("link");
+    for (const std::string& l : {std::string(parent->Attribute("link")), c})
+      if (!links.count(l))
+        throw std::runtime_error(doc + ": joint " + quote_value(name) + ": link " + quote_value(l) +
+                                 " is not a link of the robot");
     const auto [it, fresh] = parent_joint.emplace(c, name);
     if (!fresh)
       throw std::runtime_error(doc + ": link " + quote_value(c) + " is the child of two joints, " +
@@ -144,6 +155,15 @@ void check_tree(const XMLElement& robot, const std::string& doc) {
       throw std::runtime_error(doc + ": link " + quote_value(at) +
                                " lies on a cycle of joints (the links must form a tree)");
     for (const std::string& l : walked) state[l] = 2;
+  }
+  std::string root;
+  for (const std::string& l : links) {
+    if (parent_link.count(l)) continue;
+    if (!root.empty())
+      throw std::runtime_error(doc + ": two root links (links that are no joint's child), " +
+                               quote_value(root) + " and " + quote_value(l) +
+                               " (the links must form one tree)");
+    root = l;
   }
 }
 

@@ -60,7 +60,16 @@ Parsed parse(const std::string& xml, const std::string& doc) {
   console_bridge::useOutputHandler(&collector);
   std::string error;
   try {
-    out.model = urdf::parseURDF(xml);
+    const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(xml);
+    // Links own their children: a long chain would be destroyed by recursion (100000 links need
+    // more than 1 MB of stack); cut the links apart first.
+    if (model)
+      out.model = urdf::ModelInterfaceSharedPtr(model.get(), [model](urdf::ModelInterface*) {
+        for (const auto& kv : model->links_) {
+          kv.second->child_links.clear();
+          kv.second->child_joints.clear();
+        }
+      });
   } catch (const std::exception& e) {
     error = e.what();
   }

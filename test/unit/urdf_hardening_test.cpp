@@ -1,6 +1,7 @@
 // Hostile and careless URDFs and meshes (issue 22): deep link chains, files of the wrong type or
 // size, collision elements urdfdom drops without a word, absurd sizes, and clear messages.
 #include <gtest/gtest.h>
+#include <pthread.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -96,9 +97,28 @@ TEST_F(UrdfHardening, DeepChainLoads) {
   EXPECT_EQ(obs[0].name, "l0");
 }
 
+// Runs `f` in a thread with a stack of `bytes` (the node loads in its service threads).
+template <typename F>
+void on_stack(size_t bytes, F f) {
+  pthread_attr_t attr;
+  pthread_attr_init(&attr);
+  pthread_attr_setstacksize(&attr, bytes);
+  pthread_t thread;
+  auto run = [](void* arg) -> void* {
+    (*static_cast<F*>(arg))();
+    return nullptr;
+  };
+  ASSERT_EQ(pthread_create(&thread, &attr, run, &f), 0);
+  pthread_join(thread, nullptr);
+  pthread_attr_destroy(&attr);
+}
+
 TEST_F(UrdfHardening, LinkLimit) {
   const std::string at = write("at.urdf", chain(SceneLimits::max_urdf_links));
-  EXPECT_EQ(load_urdf_obstacles(at).size(), 1u);
+  // urdfdom's model destroyed a chain by recursion: more than 1 MB of stack for 100000 links.
+  size_t loaded = 0;
+  on_stack(1 << 20, [&] { loaded = load_urdf_obstacles(at).size(); });
+  EXPECT_EQ(loaded, 1u);
   const std::string over = write("over.urdf", chain(SceneLimits::max_urdf_links + 1));
   const std::string msg = error_of([&] { load_urdf_obstacles(over); });
   EXPECT_HAS(msg, over);
@@ -133,6 +153,19 @@ TEST_F(UrdfHardening, NotATree) {
       "<joint name='ba' type='fixed'><parent link='b'/><child link='a'/></joint></robot>";
   msg = error_of([&] { parse_urdf_obstacles(cycle, ""); });
   EXPECT_HAS(msg, "lies on a cycle of joints");
+  // urdfdom would fail only after linking the chain, then destroy it by recursion.
+  std::string long_chain = chain(SceneLimits::max_urdf_links - 1);
+  long_chain.resize(long_chain.size() - std::string("</robot>\n").size());
+  const std::string two_roots = long_chain + "<link name='other'/></robot>";
+  const std::string missing =
+      long_chain + "<joint name='x' type='fixed'><parent link='l0'/><child link='nope'/></joint>" +
+      "</robot>";
+  on_stack(1 << 20, [&] {
+    msg = error_of([&] { parse_urdf_obstacles(two_roots, ""); });
+    EXPECT_HAS(msg, "two root links");
+    msg = error_of([&] { parse_urdf_obstacles(missing, ""); });
+    EXPECT_HAS(msg, "joint 'x': link 'nope' is not a link of the robot");
+  });
 }
 
 TEST_F(UrdfHardening, FileTypeAndSize) {
