@@ -15,8 +15,8 @@ set -euo pipefail
 packages=(
   # toolchain
   g++ make cmake pkg-config
-  # rod library (obstacles: FCL, urdfdom, assimp)
-  libeigen3-dev libyaml-cpp-dev libfcl-dev liburdfdom-dev libassimp-dev
+  # rod library (obstacles: FCL, urdfdom, assimp; tinyxml2 checks URDF text)
+  libeigen3-dev libyaml-cpp-dev libfcl-dev liburdfdom-dev libassimp-dev libtinyxml2-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # the scene reader's fuzz test (libFuzzer comes with libclang-rt-dev, only recommended by clang)

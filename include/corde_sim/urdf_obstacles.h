@@ -23,9 +23,15 @@ namespace corde {
 // (a folder named <pkg> or holding a package.xml that names <pkg>), then in ROS_PACKAGE_PATH's
 // folders; `file://` and relative names are relative to the URDF's folder.
 //
-// Throws std::runtime_error naming the file and the element (link, collision index, joint) for a
-// URDF that does not parse, a missing or unreadable mesh, a non-positive or non-finite size or
-// scale, or a joint name in `joint_values` the robot lacks.
+// The file is read with corde::read_input_file (a regular file of at most
+// SceneLimits::max_urdf_bytes). Throws std::runtime_error naming the file and the element (link,
+// collision index, joint) for a URDF that does not parse, is not XML with a <robot> root, nests
+// elements more than 100 deep, has more than SceneLimits::max_urdf_links links, a link that is the
+// child of two joints or not connected to the root; a collision element urdfdom would skip (a
+// geometry or origin that does not parse, an empty or unknown geometry); a size, mesh scale or
+// position that is not finite, not positive (sizes) or zero (scales), or beyond
+// SceneLimits::max_length; a missing or unreadable mesh; or a joint name in `joint_values` the
+// robot lacks. Links are walked without recursion.
 //
 // `chains`, when given, receives per obstacle (same order) how it is posed from the joint values,
 // for re-posing the links when joints move (UrdfChain::pose).
@@ -34,8 +40,8 @@ std::vector<Obstacle> load_urdf_obstacles(const std::string& path,
                                           const std::map<std::string, double>& joint_values = {},
                                           std::vector<UrdfChain>* chains = nullptr);
 
-// The same from the URDF's text; relative mesh names are resolved against `base_dir`. Messages
-// name the document "<urdf string>".
+// The same from the URDF's text (at most SceneLimits::max_urdf_bytes); relative mesh names are
+// resolved against `base_dir`. Messages name the document "<urdf string>".
 std::vector<Obstacle> parse_urdf_obstacles(const std::string& xml, const std::string& base_dir,
                                            const std::map<std::string, double>& joint_values = {},
                                            std::vector<UrdfChain>* chains = nullptr);
@@ -93,7 +99,10 @@ std::vector<UrdfCollision> parse_urdf_collisions(const std::string& xml,
 std::string resolve_resource_path(const std::string& uri, const std::string& base_dir);
 
 // Triangles of a mesh file (STL, DAE, OBJ, ... : what assimp reads), every node's transform
-// applied, then scaled per axis. Throws std::runtime_error naming the file.
+// applied, then scaled per axis. Throws std::runtime_error naming the file when it is not a
+// regular file of at most SceneLimits::max_mesh_bytes (checked before assimp opens it), has more
+// than SceneLimits::max_mesh_triangles triangles or max_mesh_vertices vertices, or a scaled
+// vertex not finite or beyond SceneLimits::max_length.
 TriangleMesh load_mesh_file(const std::string& path, const Vec3& scale = Vec3::Ones());
 
 }  // namespace corde

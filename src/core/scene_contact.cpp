@@ -155,6 +155,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
     if (m.has("urdf")) {
       if (m.has("type")) m.fail("give either type or urdf");
       const Value file = m.get("urdf");
+      if (file.string().empty()) file.fail("the path is empty");
       std::map<std::string, double> joints;
       if (auto j = m.find("joints")) {
         if (!j->is_map()) j->fail("expected a map of joint names to values, got " + j->describe());

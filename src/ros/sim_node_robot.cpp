@@ -4,11 +4,11 @@
 #include <ros/console.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
+#include "corde_sim/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
+#include "corde_sim/scene.h"
 
 namespace corde_sim {
 
@@ -28,15 +28,15 @@ void SimNode::load_robot() {
   std::string xml, base_dir, doc, param;
   if (from_file) {
     param = "robot_urdf_file";
-    std::ifstream in(params_.robot_urdf_file);
-    if (!in)
-      throw std::invalid_argument("parameter ~robot_urdf_file: URDF file '" +
-                                  params_.robot_urdf_file + "' cannot be opened");
-    std::stringstream text;
-    text << in.rdbuf();
-    xml = text.str();
+    // Regular files only, bounded (a FIFO would block the node, /dev/zero exhaust its memory).
+    try {
+      xml = corde::read_input_file(params_.robot_urdf_file, "URDF",
+                                   corde::SceneLimits::max_urdf_bytes);
+    } catch (const corde::FileError& e) {
+      throw std::invalid_argument(std::string("parameter ~robot_urdf_file: ") + e.what());
+    }
     base_dir = std::filesystem::path(params_.robot_urdf_file).parent_path().string();
-    doc = "URDF file '" + params_.robot_urdf_file + "'";
+    doc = params_.robot_urdf_file;
   } else {
     param = "robot_collision";
     // Resolved like robot_state_publisher's: relative to the node's namespace.

@@ -50,7 +50,7 @@ if [ -n "$stale" ] || [ ! -x "$bin" ]; then
   # shellcheck disable=SC2086
   printf '%s\n' $stale | xargs -r -P 2 -I{} sh -c \
     "$cxx $flags -c {} -o $work/obj/\$(basename {} .cpp).o"
-  "$cxx" -fsanitize=fuzzer,address,undefined "${objects[@]}" -lyaml-cpp -lfcl -lccd -lassimp -lurdfdom_model -lconsole_bridge -o "$bin.tmp"
+  "$cxx" -fsanitize=fuzzer,address,undefined "${objects[@]}" -lyaml-cpp -lfcl -lccd -lassimp -lurdfdom_model -lconsole_bridge -ltinyxml2 -o "$bin.tmp"
   mv "$bin.tmp" "$bin"
 fi
 [ "$arg" = "--build" ] && exit 0

@@ -224,7 +224,7 @@ TEST_F(UrdfObstacles, Errors) {
   expect_error([&] { load_urdf_obstacles(path, {{"elbow", 1.0}}); }, {path, "joint 'elbow'"});
 
   expect_error([&] { load_urdf_obstacles((dir_ / "nothing.urdf").string()); },
-               {"nothing.urdf", "cannot be opened"});
+               {"nothing.urdf", "cannot open the URDF"});
   expect_error([&] { parse_urdf_obstacles("<robot name='x'><link name=", ""); },
                {"<urdf string>", "not a valid URDF"});
 }
