@@ -267,6 +267,7 @@ void read_contact_settings(const Value& v, ContactSettings* s) {
     if (s->push_out > 1.0) p->fail("must be <= 1");
   }
   if (auto p = m.find("max_push_speed")) s->max_push_speed = p->non_negative();
+  if (auto p = m.find("deep_penetration")) s->deep_penetration = p->positive();
   if (auto p = m.find("surface_friction")) s->surface_friction = p->boolean();
   if (auto p = m.find("rolling_friction")) {
     s->rolling_friction = p->non_negative();

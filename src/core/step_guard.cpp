@@ -84,6 +84,8 @@ const char* guard_event_kind_name(GuardEvent::Kind kind) {
       return "bend";
     case GuardEvent::Kind::kEnergy:
       return "energy";
+    case GuardEvent::Kind::kPenetration:
+      return "penetration";
     case GuardEvent::Kind::kRestored:
       return "restored";
     case GuardEvent::Kind::kUnrecoverable:
@@ -174,6 +176,22 @@ GuardProblem check_state(const World& world, const GuardSettings& s) {
                        "element " + std::to_string(j) +
                            fmt(" turned %.3g rad from its rest shape (limit %.3g)",
                                2.0 * std::asin(std::min(1.0, 0.5 * turn)), s.max_bend_angle));
+    }
+  }
+  // The contact stage's deepest contact with a static obstacle or a rod, at the start of the last
+  // step: the solver keeps those within about 1 % of the radius, so one this deep went through a
+  // surface (a moving obstacle can impose a depth: reported by the contact stage, not checked).
+  const ContactSystem* cs = world.contacts();
+  if (s.max_penetration > 0.0 && cs && cs->stats().max_static_ratio > s.max_penetration) {
+    const ContactStats& st = cs->stats();
+    const int k = st.deepest_static;
+    if (k >= 0 && k < static_cast<int>(cs->contacts().size())) {
+      const Contact& c = cs->contacts()[k];
+      char limit[64];
+      std::snprintf(limit, sizeof limit, " (limit %.3g r)", s.max_penetration);
+      if (c.rod_a < static_cast<int>(world.rods().size()))
+        return problem(K::kPenetration, world.rods()[c.rod_a], c.seg_a,
+                       describe_contact(world, c) + limit);
     }
   }
   return GuardProblem();
