@@ -108,11 +108,9 @@ struct ContactStats {
   int active = 0;                // pairs that carried an impulse
   double max_penetration = 0.0;  // largest -gap at detection (m, >= 0)
   int deepest = -1;              // its contact's index in contacts() (-1: none penetrates)
-  double max_ratio = 0.0;        // the largest -gap over rod a's radius
-  // The same over the contacts with static obstacles and between rods (the stability guard's
-  // check: a moving obstacle can impose any depth), in units of rod a's radius.
-  double max_static_ratio = 0.0;
-  int deepest_static = -1;
+  // The deepest deep contact's -gap over rod a's radius (0: no contact deeper than
+  // ContactSettings::deep_penetration).
+  double max_ratio = 0.0;
   int candidate_pairs = 0;  // segment pairs the broad phase passed to the narrow phase
   int iterations = 0;       // Gauss-Seidel sweeps done (they stop once converged)
   int rounds = 0;           // implicit: rounds of sweeps and rod responses
@@ -189,6 +187,7 @@ class ContactSystem {
   std::vector<double> scratch_w_;      // per contact: the pair's inverse mass
   std::vector<double> scratch_inv_w_;  // and its inverse (0 where the pair cannot move)
   std::vector<double> cap_;            // per contact: the largest normal impulse (max_dv)
+  bool any_cap_ = false;               // some contact has a max_dv (else cap_ is not used)
   // Surface friction. A lever: one segment turned by a contact's friction, dw = c J (n x dp) and
   // the point's velocity gains c w x n (c = -share times the lever, J the world inverse inertia).
   struct Lever {

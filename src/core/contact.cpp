@@ -194,8 +194,10 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   // meeting a contact the step would close (or a penetration) is stepped again as backward Euler,
   // as the steps after it are while the contact lasts (the prediction), and detection redone.
   // Other rods' BDF2 steps stand.
-  bool restep = false;
-  for (const Contact& c : contacts_) {
+  bool restep = false, any_bdf2 = false;
+  for (int r = 0; r < nr; ++r) any_bdf2 = any_bdf2 || steppers[r].last_step_second_order();
+  for (size_t k = 0; any_bdf2 && k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
     const bool a2 = steppers[c.rod_a].last_step_second_order();
     const bool b2 = c.rod_b >= 0 && steppers[c.rod_b].last_step_second_order();
     if (!a2 && !b2) continue;
@@ -379,8 +381,8 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       Contact& c = contacts_[k];
       const double dpn = use_last ? last_dp_[k].pn : 0.0;
       const Vec3 dpt = use_last ? last_dp_[k].pt : Vec3::Zero();
-      c.pn =
-          std::min(std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn) + beta * dpn), cap_[k]);
+      c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn) + beta * dpn);
+      if (any_cap_) c.pn = std::min(c.pn, cap_[k]);
       c.pt = within(tangential(old_[k].pt + alpha * (c.pt - old_[k].pt) + beta * dpt, c.normal),
                     c.mu * c.pn);
       // Rolling resistance as swept (the scale fits the normal rows), within the new bound.
@@ -419,7 +421,7 @@ void ContactSystem::prepare_sweeps(const World& world) {
   std::vector<double>& wsum = scratch_w_;
   wsum.resize(contacts_.size());
   scratch_inv_w_.resize(contacts_.size());
-  cap_.resize(contacts_.size());
+  if (any_cap_) cap_.resize(contacts_.size());
   levers_.clear();
   contact_levers_.resize(contacts_.size());
   if (world.contact.rolling_friction > 0.0) rolls_.resize(contacts_.size());
@@ -433,8 +435,10 @@ void ContactSystem::prepare_sweeps(const World& world) {
     }
     wsum[k] = w;
     scratch_inv_w_[k] = w > 0.0 ? 1.0 / w : 0.0;
-    cap_[k] = c.max_dv < kNoCap && w > 0.0 ? c.max_dv * scratch_inv_w_[k] : kNoCap;
-    c.pn = std::min(c.pn, cap_[k]);
+    if (any_cap_) {
+      cap_[k] = c.max_dv < kNoCap && w > 0.0 ? c.max_dv * scratch_inv_w_[k] : kNoCap;
+      c.pn = std::min(c.pn, cap_[k]);
+    }
     contact_levers_[k].count = 0;
     if (w > 0.0 && (c.lever_a > 0.0 || c.lever_b > 0.0)) prepare_levers(world, k);
     if (w > 0.0) apply_impulse(k, c.pn * c.normal + c.pt);
@@ -558,6 +562,7 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
   };
   const std::vector<double>& wsum = scratch_w_;
   const std::vector<double>& inv_w = scratch_inv_w_;  // multiplications instead of divisions
+  const bool capped = any_cap_;
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
   // warm started, settle in a few sweeps), or the iteration limit.
   for (int it = 0; it < iterations; ++it) {
@@ -576,7 +581,8 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
       if (cl.count > 0) vr += lever_velocity(k);
       const double target = normal_target(c, cs, h);
       const double vn = vr.dot(c.normal);
-      const double pn = std::min(std::max(0.0, c.pn + (target - vn) * iw), cap_[k]);
+      double pn = std::max(0.0, c.pn + (target - vn) * iw);
+      if (capped) pn = std::min(pn, cap_[k]);
       Vec3 dp = (pn - c.pn) * c.normal;
       c.pn = pn;
       // Friction: the impulse that stops the sliding, projected onto the Coulomb disc. Without
@@ -710,12 +716,15 @@ void ContactSystem::detect(World& world, double h) {
     stats_.max_penetration = -c.gap;
     stats_.deepest = static_cast<int>(k);
   }
-  // The penetrating contacts, searched only when there is one.
-  if (stats_.deepest < 0) return;
-  for (size_t k = 0; k < contacts_.size(); ++k) {
-    Contact& c = contacts_[k];
+  // Deep contacts, searched only when the deepest contact can be one.
+  any_cap_ = false;
+  double r_min = INFINITY;
+  for (const Rod& rod : rods) r_min = std::min(r_min, rod.section().radius);
+  if (!(stats_.max_penetration > cs.deep_penetration * r_min)) return;
+  for (Contact& c : contacts_) {
     if (c.gap >= 0.0) continue;
     const double ratio = -c.gap / rods[c.rod_a].section().radius;
+    if (!(ratio > cs.deep_penetration)) continue;
     stats_.max_ratio = std::max(stats_.max_ratio, ratio);
     // A deep contact with a moving obstacle (the obstacle made it): its normal impulse alone may
     // change the rod's velocity relative to the surface by no more than stopping its approach and
@@ -723,17 +732,11 @@ void ContactSystem::detect(World& world, double h) {
     // (a pinch) their impulses would otherwise grow without bound over the sweeps and launch the
     // rod. Deep contacts the solver made (a fast impact on a static obstacle, rods springing
     // against each other) are not bounded: their impulses are needed to stop the motion.
-    const bool moving = c.rod_b < 0 && obs->obstacle(c.obstacle).moving;
-    if (ratio > cs.deep_penetration && moving) {
-      const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
-                      c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
-      c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
-    }
-    // The guard's measure: only where the depth can be the solver's (a moving obstacle may
-    // impose it).
-    if (moving || !(ratio > stats_.max_static_ratio)) continue;
-    stats_.max_static_ratio = ratio;
-    stats_.deepest_static = static_cast<int>(k);
+    if (c.rod_b >= 0 || !obs->obstacle(c.obstacle).moving) continue;
+    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
+                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
+    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
+    any_cap_ = true;
   }
 }
 

@@ -182,16 +182,29 @@ GuardProblem check_state(const World& world, const GuardSettings& s) {
   // step: the solver keeps those within about 1 % of the radius, so one this deep went through a
   // surface (a moving obstacle can impose a depth: reported by the contact stage, not checked).
   const ContactSystem* cs = world.contacts();
-  if (s.max_penetration > 0.0 && cs && cs->stats().max_static_ratio > s.max_penetration) {
-    const ContactStats& st = cs->stats();
-    const int k = st.deepest_static;
-    if (k >= 0 && k < static_cast<int>(cs->contacts().size())) {
-      const Contact& c = cs->contacts()[k];
+  if (s.max_penetration > 0.0 && cs && cs->stats().deepest >= 0) {
+    const auto& contacts = cs->contacts();
+    const int nr = static_cast<int>(world.rods().size());
+    int worst = -1;
+    double deepest = s.max_penetration;
+    for (size_t k = 0; k < contacts.size(); ++k) {
+      const Contact& c = contacts[k];
+      if (c.gap >= 0.0 || c.rod_a >= nr) continue;
+      if (c.rod_b < 0 && (!world.obstacles || c.obstacle >= world.obstacles->size() ||
+                          world.obstacles->obstacle(c.obstacle).moving))
+        continue;
+      const double ratio = -c.gap / world.rods()[c.rod_a].section().radius;
+      if (ratio > deepest) {
+        deepest = ratio;
+        worst = static_cast<int>(k);
+      }
+    }
+    if (worst >= 0) {
+      const Contact& c = contacts[worst];
       char limit[64];
       std::snprintf(limit, sizeof limit, " (limit %.3g r)", s.max_penetration);
-      if (c.rod_a < static_cast<int>(world.rods().size()))
-        return problem(K::kPenetration, world.rods()[c.rod_a], c.seg_a,
-                       describe_contact(world, c) + limit);
+      return problem(K::kPenetration, world.rods()[c.rod_a], c.seg_a,
+                     describe_contact(world, c) + limit);
     }
   }
   return GuardProblem();
