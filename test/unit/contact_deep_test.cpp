@@ -213,3 +213,25 @@ TEST(ContactDeep, RunSceneReportsDeepContactsThrottled) {
 
 }  // namespace
 }  // namespace corde
+
+namespace corde {
+namespace {
+
+// The scene key: read, and refused unless positive (naming the key).
+TEST(ContactDeep, DeepPenetrationSceneKey) {
+  const std::string rods =
+      "rods:\n  - {name: r, radius: 0.003, material: soft_cable, shape: {type: straight}}\n";
+  EXPECT_DOUBLE_EQ(
+      parse_scene("contact: {deep_penetration: 0.25}\n" + rods).world.contact.deep_penetration,
+      0.25);
+  EXPECT_DOUBLE_EQ(parse_scene(rods).world.contact.deep_penetration, 0.1);
+  try {
+    parse_scene("contact: {deep_penetration: 0}\n" + rods);
+    ADD_FAILURE() << "deep_penetration 0 accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("deep_penetration"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace corde
