@@ -15,7 +15,9 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "corde_sim/obstacle.h"
@@ -23,6 +25,7 @@
 namespace corde {
 
 class ImplicitEuler;
+struct ImplicitResult;
 class Rod;
 class World;
 
@@ -67,6 +70,11 @@ struct ContactSettings {
   // surface friction, a rope rolling on it. Spin about the normal is left to the sliding friction
   // of neighbouring contacts.
   double rolling_friction = 0.0;
+  // A contact deeper than this fraction of the rod's radius is a deep contact: reported with the
+  // rod, segment, obstacle (or other rod) and depth (deep_contact_report; corde_run and the node
+  // warn, throttled). The solver keeps contacts it can resolve within about 1 % of the radius;
+  // deeper ones are imposed (a cable pinched between two links) or went through a surface.
+  double deep_penetration = 0.1;
 };
 
 struct Contact {
@@ -89,6 +97,9 @@ struct Contact {
   double pn = 0.0;                   // normal impulse of the step (N s)
   Vec3 pt = Vec3::Zero();            // tangential impulse (N s)
   Vec3 pr = Vec3::Zero();  // rolling resistance's torque impulse on a's segment (N m s; -pr on b's)
+  // A deep contact (beyond deep_penetration): the largest change of the pair's relative normal
+  // velocity its normal impulse may make alone (m/s); infinite for the others.
+  double max_dv = std::numeric_limits<double>::infinity();
 };
 
 // Statistics of the last step, for diagnostics and tests.
@@ -96,9 +107,13 @@ struct ContactStats {
   int contacts = 0;              // pairs within the margin
   int active = 0;                // pairs that carried an impulse
   double max_penetration = 0.0;  // largest -gap at detection (m, >= 0)
-  int candidate_pairs = 0;       // segment pairs the broad phase passed to the narrow phase
-  int iterations = 0;            // Gauss-Seidel sweeps done (they stop once converged)
-  int rounds = 0;                // implicit: rounds of sweeps and rod responses
+  int deepest = -1;              // its contact's index in contacts() (-1: none penetrates)
+  // The deepest deep contact's -gap over rod a's radius (0: no contact deeper than
+  // ContactSettings::deep_penetration).
+  double max_ratio = 0.0;
+  int candidate_pairs = 0;  // segment pairs the broad phase passed to the narrow phase
+  int iterations = 0;       // Gauss-Seidel sweeps done (they stop once converged)
+  int rounds = 0;           // implicit: rounds of sweeps and rod responses
 };
 
 // The contact stage of World::step: detection and the constraint solve. Holds the scratch and the
@@ -118,7 +133,10 @@ class ContactSystem {
   // rod does, so impulses approach from below) each followed by every touched rod's linearised
   // response to the impulses so far (ImplicitEuler::respond: the compliance of the step's own
   // factorisation), which leaves the rods at their final state.
-  void solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers);
+  // A rod whose step was BDF2 and that meets a contact the step would close is stepped again as
+  // backward Euler (ImplicitEuler::restep_first_order; its result replaces (*results)[r]).
+  void solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers,
+                      std::vector<ImplicitResult>* results = nullptr);
 
   const std::vector<Contact>& contacts() const { return contacts_; }
   // Implicit integrator: the node impulses rod r received in the last step (null if none).
@@ -168,6 +186,8 @@ class ContactSystem {
   std::vector<std::vector<double>> inv_mass_;
   std::vector<double> scratch_w_;      // per contact: the pair's inverse mass
   std::vector<double> scratch_inv_w_;  // and its inverse (0 where the pair cannot move)
+  std::vector<double> cap_;            // per contact: the largest normal impulse (max_dv)
+  bool any_cap_ = false;               // some contact has a max_dv (else cap_ is not used)
   // Surface friction. A lever: one segment turned by a contact's friction, dw = c J (n x dp) and
   // the point's velocity gains c w x n (c = -share times the lever, J the world inverse inertia).
   struct Lever {
@@ -232,5 +252,14 @@ class ContactSystem {
   std::vector<Previous> old_;      // implicit: the impulses before a round's sweeps
   std::vector<Previous> last_dp_;  // implicit: the last round's change per contact
 };
+
+// The rod segments with a contact deeper than `fraction` of the rod's radius in the world's last
+// contact stage (its detection at the start of the last step), deepest first, at most `max_lines`
+// of them, separated by "; ": "rod 'cable' segment 16: 4.2 mm (1.4 r) into 'upper', 3.9 mm
+// (1.3 r) into 'lower'", naming the obstacles (a URDF's as '<name>/<link>') or the other rod and
+// its segment. "" when there is none.
+std::string deep_contact_report(const World& world, double fraction, int max_lines = 3);
+// A contact (of world's last contact stage) as "segment 16: 4.2 mm (1.4 r) into 'upper'".
+std::string describe_contact(const World& world, const Contact& c);
 
 }  // namespace corde

@@ -109,6 +109,11 @@ class ImplicitEuler {
   bool last_step_second_order() const { return used_bdf2_; }
   // Forgets the history: the next step is a backward-Euler step.
   void reset_history() { have_history_ = false; }
+  // Takes the last step again from its start state, as a backward-Euler step (no prediction):
+  // a BDF2 step moves the rod by a third of its last step's motion whatever the contact impulses
+  // do (x = (4 x^n - x^{n-1}) / 3 + 2h/3 v), so a rod hitting a contact is stepped this way
+  // (ContactSystem::solve_implicit).
+  ImplicitResult restep_first_order(Rod& rod, double t, double h, const Vec3& gravity);
 
   // After step(): sets the rod to the step's result plus the response to node impulses p (N s,
   // world, one per node; applied as forces p / b over the step, b the step's effective step:
@@ -169,7 +174,8 @@ class ImplicitEuler {
 
   ImplicitOptions opt_;
   bool bdf2_ = false, used_bdf2_ = false;
-  double beta_ = 0.0;  // the step's effective step: h, or 2h/3 for BDF2
+  bool force_first_ = false;  // restep_first_order: this step is backward Euler
+  double beta_ = 0.0;         // the step's effective step: h, or 2h/3 for BDF2
   std::vector<Vec3> x0_, v0_, w0_, xhat_, xs_;
   std::vector<Quat> q0_, qk_;
   // The origin of the step's node velocities, v = (x - xt_) / beta_ (x^n, or BDF2's x~), and per

@@ -41,6 +41,12 @@ struct RunOptions {
   GuardSettings guard;
   // Called with each guard event as it happens (corde_run prints them on stderr).
   std::function<void(const GuardEvent&)> on_guard_event;
+  // Deep contacts (deeper than ContactSettings::deep_penetration times the radius: imposed by a
+  // moving obstacle, a pinch, or gone through a surface): called with the world's time and
+  // deep_contact_report's text at most once per deep_contact_interval of simulated time
+  // (corde_run prints it on stderr).
+  std::function<void(double time, const std::string& report)> on_deep_contact;
+  double deep_contact_interval = 0.1;  // s
 };
 
 struct RunResult {
@@ -61,6 +67,11 @@ struct RunResult {
   bool guard_failed = false;
   long guard_rollbacks = 0;
   double guard_work = 0.0;  // J, the guard's bound on the work done on the rods over the run
+  // Deep contacts: steps whose contact stage found one, the deepest (in radii) and its report.
+  long deep_contact_steps = 0;
+  double deepest_contact = 0.0;
+  double deepest_contact_time = 0.0;
+  std::string deepest_contact_report;
 };
 
 // The CSV header: t,rod,segment,x0,y0,z0,x1,y1,z1,qx,qy,qz,qw

@@ -48,6 +48,13 @@ struct GuardSettings {
   // the integrators' bounded energy errors.
   double energy_tolerance = 0.1;
   double energy_floor = 1e-3;
+  // Penetration: the contact stage's deepest contact at the start of the last step (ContactStats)
+  // deeper than this fraction of the rod's radius, into a static obstacle or another rod (or the
+  // rod itself), fails the check: the solver keeps such contacts within about 1 % of the radius,
+  // so a state that deep went through a surface. A moving obstacle (a robot link, a keyframed
+  // one) can impose any depth (a cable pinched between two links): it is not checked here but
+  // reported (deep_contact_report, ContactSettings::deep_penetration). 0: no check.
+  double max_penetration = 0.5;
   // Retries: halve the step up to max_halvings times (each cures the failure only if it persists
   // through a replay). An explicit method switches to the implicit one (at the user's step)
   // when that is exhausted, or at once when the stability estimate says the halved steps would
@@ -67,6 +74,7 @@ struct GuardEvent {
     kShear,          // a frame beyond max_shear_angle off its tangent
     kBend,           // an element turned beyond max_bend_angle from its rest shape
     kEnergy,         // energy grew more than the work done allows
+    kPenetration,    // a rod deeper than max_penetration in a static obstacle or another rod
     kRestored,       // back to the user's step and method after good steps
     kUnrecoverable,  // no retry helped: the world stays at its last good state
   };

@@ -83,6 +83,7 @@ class World {
   std::shared_ptr<ContactSystem> contacts_;
   std::vector<ImplicitEuler> implicit_;  // per rod (scratch and the step's factorisation)
   ImplicitStats implicit_stats_;
+  std::vector<ImplicitResult> implicit_results_;  // per rod, the last step's (scratch)
   void step_implicit();
 };
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "corde_sim/implicit_step.h"
 #include "corde_sim/segment_distance.h"
@@ -21,6 +23,8 @@ std::uint64_t pair_key(const Contact& c) {
   return (static_cast<std::uint64_t>(c.rod_a) << 54) ^ (static_cast<std::uint64_t>(c.seg_a) << 43) ^
          (where << 41) ^ other;
 }
+
+constexpr double kNoCap = std::numeric_limits<double>::infinity();
 
 // Cell coordinates packed in 21 bits each (offset so that negatives fit).
 std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -151,34 +155,74 @@ void ContactSystem::solve(World& world, double h) {
   finish(world, h, true);
 }
 
-void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers) {
+void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers,
+                                   std::vector<ImplicitResult>* results) {
   auto& rods = world.rods();
   const int nr = static_cast<int>(rods.size());
   velocity_.resize(nr);
   inv_mass_.resize(nr);
   omega_.resize(nr);
   spin_ = tracks_spin(world.contact);
-  // Each rod's velocities after its step without contacts; detection at the step's start.
   held_x_.resize(nr);
   held_v_.resize(nr);
+  // Each rod's velocities after its step without contacts (a BDF2 step's: its displacement over
+  // h, which the contacts' gaps follow); detection at the step's start.
+  auto detect_at_start = [&] {
+    for (int r = 0; r < nr; ++r) {
+      Rod& rod = rods[r];
+      if (steppers[r].last_step_second_order()) {
+        const auto& x0 = steppers[r].start_positions();
+        auto& u = velocity_[r];
+        u.resize(x0.size());
+        for (size_t i = 0; i < x0.size(); ++i) u[i] = (rod.positions()[i] - x0[i]) / h;
+      } else {
+        velocity_[r] = rod.velocities();
+      }
+      held_x_[r].swap(rod.positions());
+      held_v_[r].swap(rod.velocities());
+      rod.positions() = steppers[r].start_positions();
+      rod.velocities() = steppers[r].start_velocities();
+    }
+    detect(world, h);
+    for (int r = 0; r < nr; ++r) {
+      rods[r].positions().swap(held_x_[r]);
+      rods[r].velocities().swap(held_v_[r]);
+    }
+  };
+  detect_at_start();
+  // A BDF2 step carries a third of the last step's motion on whatever the impulses do: a rod
+  // meeting a contact the step would close (or a penetration) is stepped again as backward Euler,
+  // as the steps after it are while the contact lasts (the prediction), and detection redone.
+  // Other rods' BDF2 steps stand.
+  bool restep = false, any_bdf2 = false;
+  for (int r = 0; r < nr; ++r) any_bdf2 = any_bdf2 || steppers[r].last_step_second_order();
+  for (size_t k = 0; any_bdf2 && k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
+    const bool a2 = steppers[c.rod_a].last_step_second_order();
+    const bool b2 = c.rod_b >= 0 && steppers[c.rod_b].last_step_second_order();
+    if (!a2 && !b2) continue;
+    Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
+    vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
+                              c.s_b * velocity_[c.rod_b][c.seg_b + 1])
+                       : c.surface_velocity;
+    if (vr.dot(c.normal) >= normal_target(c, world.contact, h)) continue;
+    for (int r : {c.rod_a, c.rod_b}) {
+      if (r < 0 || !steppers[r].last_step_second_order()) continue;
+      const ImplicitResult res =
+          steppers[r].restep_first_order(rods[r], world.time(), h, world.gravity);
+      if (results && r < static_cast<int>(results->size())) (*results)[r] = res;
+      restep = true;
+    }
+  }
+  if (restep) detect_at_start();
   for (int r = 0; r < nr; ++r) {
     Rod& rod = rods[r];
     const int nn = rod.num_nodes();
-    velocity_[r] = rod.velocities();
     if (spin_) take_angular_velocities(rod, r);
     auto& w = inv_mass_[r];
     w.resize(nn);
     for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
     for (const NodeDrive& d : rod.node_drives()) w[d.node] = 0.0;
-    held_x_[r].swap(rod.positions());
-    held_v_[r].swap(rod.velocities());
-    rod.positions() = steppers[r].start_positions();
-    rod.velocities() = steppers[r].start_velocities();
-  }
-  detect(world, h);
-  for (int r = 0; r < nr; ++r) {
-    rods[r].positions().swap(held_x_[r]);
-    rods[r].velocities().swap(held_v_[r]);
   }
   warm_start();
   prepare_sweeps(world);
@@ -338,6 +382,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
       const double dpn = use_last ? last_dp_[k].pn : 0.0;
       const Vec3 dpt = use_last ? last_dp_[k].pt : Vec3::Zero();
       c.pn = std::max(0.0, old_[k].pn + alpha * (c.pn - old_[k].pn) + beta * dpn);
+      if (any_cap_) c.pn = std::min(c.pn, cap_[k]);
       c.pt = within(tangential(old_[k].pt + alpha * (c.pt - old_[k].pt) + beta * dpt, c.normal),
                     c.mu * c.pn);
       // Rolling resistance as swept (the scale fits the normal rows), within the new bound.
@@ -376,11 +421,12 @@ void ContactSystem::prepare_sweeps(const World& world) {
   std::vector<double>& wsum = scratch_w_;
   wsum.resize(contacts_.size());
   scratch_inv_w_.resize(contacts_.size());
+  if (any_cap_) cap_.resize(contacts_.size());
   levers_.clear();
   contact_levers_.resize(contacts_.size());
   if (world.contact.rolling_friction > 0.0) rolls_.resize(contacts_.size());
   for (size_t k = 0; k < contacts_.size(); ++k) {
-    const Contact& c = contacts_[k];
+    Contact& c = contacts_[k];
     const auto& wa = inv_mass_[c.rod_a];
     double w = (1 - c.s_a) * (1 - c.s_a) * wa[c.seg_a] + c.s_a * c.s_a * wa[c.seg_a + 1];
     if (c.rod_b >= 0) {
@@ -389,6 +435,10 @@ void ContactSystem::prepare_sweeps(const World& world) {
     }
     wsum[k] = w;
     scratch_inv_w_[k] = w > 0.0 ? 1.0 / w : 0.0;
+    if (any_cap_) {
+      cap_[k] = c.max_dv < kNoCap && w > 0.0 ? c.max_dv * scratch_inv_w_[k] : kNoCap;
+      c.pn = std::min(c.pn, cap_[k]);
+    }
     contact_levers_[k].count = 0;
     if (w > 0.0 && (c.lever_a > 0.0 || c.lever_b > 0.0)) prepare_levers(world, k);
     if (w > 0.0) apply_impulse(k, c.pn * c.normal + c.pt);
@@ -512,6 +562,7 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
   };
   const std::vector<double>& wsum = scratch_w_;
   const std::vector<double>& inv_w = scratch_inv_w_;  // multiplications instead of divisions
+  const bool capped = any_cap_;
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
   // warm started, settle in a few sweeps), or the iteration limit.
   for (int it = 0; it < iterations; ++it) {
@@ -530,7 +581,8 @@ void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
       if (cl.count > 0) vr += lever_velocity(k);
       const double target = normal_target(c, cs, h);
       const double vn = vr.dot(c.normal);
-      const double pn = std::max(0.0, c.pn + (target - vn) * iw);
+      double pn = std::max(0.0, c.pn + (target - vn) * iw);
+      if (capped) pn = std::min(pn, cap_[k]);
       Vec3 dp = (pn - c.pn) * c.normal;
       c.pn = pn;
       // Friction: the impulse that stops the sliding, projected onto the Coulomb disc. Without
@@ -657,8 +709,35 @@ void ContactSystem::detect(World& world, double h) {
   }
   detect_rod_pairs(world, h);
   stats_.contacts = static_cast<int>(contacts_.size());
-  for (const Contact& c : contacts_)
-    stats_.max_penetration = std::max(stats_.max_penetration, -c.gap);
+  const ObstacleSet* obs = world.obstacles.get();
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    Contact& c = contacts_[k];
+    if (!(-c.gap > stats_.max_penetration)) continue;
+    stats_.max_penetration = -c.gap;
+    stats_.deepest = static_cast<int>(k);
+  }
+  // Deep contacts, searched only when the deepest contact can be one.
+  any_cap_ = false;
+  double r_min = INFINITY;
+  for (const Rod& rod : rods) r_min = std::min(r_min, rod.section().radius);
+  if (!(stats_.max_penetration > cs.deep_penetration * r_min)) return;
+  for (Contact& c : contacts_) {
+    if (c.gap >= 0.0) continue;
+    const double ratio = -c.gap / rods[c.rod_a].section().radius;
+    if (!(ratio > cs.deep_penetration)) continue;
+    stats_.max_ratio = std::max(stats_.max_ratio, ratio);
+    // A deep contact with a moving obstacle (the obstacle made it): its normal impulse alone may
+    // change the rod's velocity relative to the surface by no more than stopping its approach and
+    // separating at max_push_speed. Where two surfaces closing on a rod demand opposite velocities
+    // (a pinch) their impulses would otherwise grow without bound over the sweeps and launch the
+    // rod. Deep contacts the solver made (a fast impact on a static obstacle, rods springing
+    // against each other) are not bounded: their impulses are needed to stop the motion.
+    if (c.rod_b >= 0 || !obs->obstacle(c.obstacle).moving) continue;
+    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
+                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
+    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
+    any_cap_ = true;
+  }
 }
 
 // Rod-rod and self contact. Each segment's box is grown by what it can travel in the step; the
@@ -871,6 +950,70 @@ void ContactSystem::build_pair_list(const World& world) {
       }
     g0 = g1;
   }
+}
+
+namespace {
+
+// "4.2 mm (1.4 r) into 'upper'" or "... into rod 'b' segment 3".
+std::string depth_phrase(const World& world, const Contact& c) {
+  const double r = world.rods()[c.rod_a].section().radius;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.3g mm (%.3g r) into ", -c.gap * 1e3, -c.gap / r);
+  std::string what;
+  if (c.rod_b >= 0)
+    what = "rod '" + world.rods()[c.rod_b].name() + "' segment " + std::to_string(c.seg_b);
+  else if (world.obstacles && c.obstacle >= 0 && c.obstacle < world.obstacles->size())
+    what = "'" + world.obstacles->obstacle(c.obstacle).name + "'";
+  else
+    what = "obstacle " + std::to_string(c.obstacle);
+  return buf + what;
+}
+
+}  // namespace
+
+std::string describe_contact(const World& world, const Contact& c) {
+  return "segment " + std::to_string(c.seg_a) + ": " + depth_phrase(world, c);
+}
+
+std::string deep_contact_report(const World& world, double fraction, int max_lines) {
+  const ContactSystem* cs = world.contacts();
+  if (!cs || cs->stats().deepest < 0) return "";
+  const auto& contacts = cs->contacts();
+  std::vector<int> deep;
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const Contact& c = contacts[k];
+    if (c.rod_a < static_cast<int>(world.rods().size()) &&
+        -c.gap > fraction * world.rods()[c.rod_a].section().radius)
+      deep.push_back(static_cast<int>(k));
+  }
+  std::stable_sort(deep.begin(), deep.end(),
+                   [&](int a, int b) { return contacts[a].gap < contacts[b].gap; });
+  // Per rod segment its deepest contact with each partner (a pinch: both links on one line).
+  struct Line {
+    int rod, seg;
+    std::vector<std::pair<int, int>> partners;  // (rod_b, obstacle)
+    std::string text;
+  };
+  std::vector<Line> lines;
+  for (int k : deep) {
+    const Contact& c = contacts[k];
+    const std::pair<int, int> partner{c.rod_b, c.rod_b >= 0 ? c.seg_b : c.obstacle};
+    auto it = std::find_if(lines.begin(), lines.end(),
+                           [&](const Line& l) { return l.rod == c.rod_a && l.seg == c.seg_a; });
+    if (it == lines.end()) {
+      if (static_cast<int>(lines.size()) >= max_lines) continue;
+      lines.push_back({c.rod_a,
+                       c.seg_a,
+                       {partner},
+                       "rod '" + world.rods()[c.rod_a].name() + "' " + describe_contact(world, c)});
+    } else if (std::find(it->partners.begin(), it->partners.end(), partner) == it->partners.end()) {
+      it->partners.push_back(partner);
+      it->text += ", " + depth_phrase(world, c);
+    }
+  }
+  std::string out;
+  for (const Line& l : lines) out += (out.empty() ? "" : "; ") + l.text;
+  return out;
 }
 
 }  // namespace corde

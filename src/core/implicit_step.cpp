@@ -376,7 +376,8 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   bool touching = false;
   if (predicted)
     for (const Vec3& p : *predicted) touching = touching || !p.isZero();
-  const bool second = bdf2_ && !touching && history_usable(rod, h);
+  const bool second = bdf2_ && !touching && !force_first_ && history_usable(rod, h);
+  force_first_ = false;
   used_bdf2_ = second;
   if (second) {
     xp_.swap(x0_);
@@ -658,6 +659,16 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     remember_end(rod);
   }
   return res;
+}
+
+ImplicitResult ImplicitEuler::restep_first_order(Rod& rod, double t, double h,
+                                                 const Vec3& gravity) {
+  rod.positions() = x0_;
+  rod.orientations() = q0_;
+  rod.velocities() = v0_;
+  rod.angular_velocities() = w0_;
+  force_first_ = true;
+  return step(rod, t, h, gravity);
 }
 
 bool ImplicitEuler::ensure_factor(const Rod& rod, bool exact_ok) {

@@ -198,9 +198,27 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   guard.set_hooks([&] { saved = held; }, [&] { held = saved; });
   guard.reset(world);
   const double t_start = world.time();
+  double next_deep_report = -INFINITY;
   const StepGuard::StepFn step_fn = [&](World* w) {
     move_holders(w);
     w->step();
+    // Deep contacts: counted every step, reported (throttled) with the rods and obstacles named.
+    const ContactSystem* cs = w->contacts();
+    if (!cs || !(cs->stats().max_ratio > w->contact.deep_penetration)) return;
+    ++r.deep_contact_steps;
+    const double ratio = cs->stats().max_ratio;
+    const bool deepest = ratio > r.deepest_contact;
+    if (!deepest && !(options.on_deep_contact && w->time() >= next_deep_report)) return;
+    const std::string report = deep_contact_report(*w, w->contact.deep_penetration);
+    if (deepest) {
+      r.deepest_contact = ratio;
+      r.deepest_contact_time = w->time();
+      r.deepest_contact_report = report;
+    }
+    if (options.on_deep_contact && w->time() >= next_deep_report) {
+      next_deep_report = w->time() + options.deep_contact_interval;
+      options.on_deep_contact(w->time(), report);
+    }
   };
   long events_seen = 0;
   auto take_events = [&] {
@@ -316,6 +334,12 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   else
     std::snprintf(buf, sizeof buf, "guard      no events\n");
   out += buf;
+  if (r.deep_contact_steps > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "contacts   deep in %ld step(s), deepest %.3g radii at t = %.6g s: ",
+                  r.deep_contact_steps, r.deepest_contact, r.deepest_contact_time);
+    out += buf + r.deepest_contact_report + "\n";
+  }
   return out;
 }
 

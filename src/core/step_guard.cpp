@@ -79,6 +79,8 @@ const char* guard_event_kind_name(GuardEvent::Kind kind) {
       return "bend";
     case GuardEvent::Kind::kEnergy:
       return "energy";
+    case GuardEvent::Kind::kPenetration:
+      return "penetration";
     case GuardEvent::Kind::kRestored:
       return "restored";
     case GuardEvent::Kind::kUnrecoverable:
@@ -169,6 +171,35 @@ GuardProblem check_state(const World& world, const GuardSettings& s) {
                        "element " + std::to_string(j) +
                            fmt(" turned %.3g rad from its rest shape (limit %.3g)",
                                2.0 * std::asin(std::min(1.0, 0.5 * turn)), s.max_bend_angle));
+    }
+  }
+  // The contact stage's deepest contact with a static obstacle or a rod, at the start of the last
+  // step: the solver keeps those within about 1 % of the radius, so one this deep went through a
+  // surface (a moving obstacle can impose a depth: reported by the contact stage, not checked).
+  const ContactSystem* cs = world.contacts();
+  if (s.max_penetration > 0.0 && cs && cs->stats().deepest >= 0) {
+    const auto& contacts = cs->contacts();
+    const int nr = static_cast<int>(world.rods().size());
+    int worst = -1;
+    double deepest = s.max_penetration;
+    for (size_t k = 0; k < contacts.size(); ++k) {
+      const Contact& c = contacts[k];
+      if (c.gap >= 0.0 || c.rod_a >= nr) continue;
+      if (c.rod_b < 0 && (!world.obstacles || c.obstacle >= world.obstacles->size() ||
+                          world.obstacles->obstacle(c.obstacle).moving))
+        continue;
+      const double ratio = -c.gap / world.rods()[c.rod_a].section().radius;
+      if (ratio > deepest) {
+        deepest = ratio;
+        worst = static_cast<int>(k);
+      }
+    }
+    if (worst >= 0) {
+      const Contact& c = contacts[worst];
+      char limit[64];
+      std::snprintf(limit, sizeof limit, " (limit %.3g r)", s.max_penetration);
+      return problem(K::kPenetration, world.rods()[c.rod_a], c.seg_a,
+                     describe_contact(world, c) + limit);
     }
   }
   return GuardProblem();

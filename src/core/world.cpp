@@ -46,6 +46,7 @@ long World::implicit_factorisations() const {
 
 void World::step_implicit() {
   implicit_.resize(rods_.size());
+  implicit_results_.resize(rods_.size());
   implicit_stats_ = ImplicitStats();
   const bool contacts = ContactSystem::needed(*this);
   for (size_t r = 0; r < rods_.size(); ++r) {
@@ -54,18 +55,21 @@ void World::step_implicit() {
     // Contacts' impulses of the last step as the prediction (they change little between steps).
     const int ri = static_cast<int>(r);
     const bool have = contacts && contacts_;
-    const ImplicitResult res = implicit_[r].step(
-        rods_[r], time_, time_step, gravity, have ? contacts_->last_impulses(ri) : nullptr,
-        have ? contacts_->last_torque_impulses(ri) : nullptr);
+    implicit_results_[r] = implicit_[r].step(rods_[r], time_, time_step, gravity,
+                                             have ? contacts_->last_impulses(ri) : nullptr,
+                                             have ? contacts_->last_torque_impulses(ri) : nullptr);
+  }
+  if (contacts) {
+    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
+    // It may take a rod's BDF2 step again as backward Euler (and replace its result).
+    contacts_->solve_implicit(*this, time_step, implicit_, &implicit_results_);
+  }
+  for (const ImplicitResult& res : implicit_results_) {
     implicit_stats_.iterations = std::max(implicit_stats_.iterations, res.iterations);
     if (!res.converged) ++implicit_stats_.unconverged;
     if (res.reference > 0.0)
       implicit_stats_.worst_residual =
           std::max(implicit_stats_.worst_residual, res.residual / res.reference);
-  }
-  if (contacts) {
-    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
-    contacts_->solve_implicit(*this, time_step, implicit_);
   }
 }
 

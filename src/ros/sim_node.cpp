@@ -184,9 +184,17 @@ void SimNode::step_once(corde::World* world) {
   if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);
   world->step();
   if (!grasps_.empty()) grasps_.after_step(*world, h);
-  if (const corde::ContactSystem* c = world->contacts())
+  if (const corde::ContactSystem* c = world->contacts()) {
     max_penetration_since_state_ =
         std::max(max_penetration_since_state_, c->stats().max_penetration);
+    // A deep contact (a cable pinched between links, a link moved into it): named, not launched.
+    const double ratio = c->stats().max_ratio;
+    if (ratio > world->contact.deep_penetration && ratio > deepest_ratio_since_state_) {
+      deepest_ratio_since_state_ = ratio;
+      deepest_contact_since_state_ =
+          corde::deep_contact_report(*world, world->contact.deep_penetration, 2);
+    }
+  }
 }
 
 long SimNode::run_steps(long n, double deadline) {
@@ -417,6 +425,7 @@ void SimNode::publish_state() {
   msg->contacts = contacts ? contacts->stats().contacts : 0;
   msg->active_contacts = contacts ? contacts->stats().active : 0;
   msg->max_penetration = max_penetration_since_state_;
+  msg->deepest_contact = deepest_contact_since_state_;
   state_pub_.publish(msg);
 }
 
@@ -440,6 +449,12 @@ void SimNode::publish_due(double now) {
     update_stats(now);
     if (params_.state_rate > 0.0) publish_state();
     max_penetration_since_state_ = 0.0;
+    if (!deepest_contact_since_state_.empty()) {
+      deep_contact_warning_ = "deep contact: " + deepest_contact_since_state_;
+      ROS_WARN_THROTTLE(2.0, "corde_sim: %s", deep_contact_warning_.c_str());
+    }
+    deepest_ratio_since_state_ = 0.0;
+    deepest_contact_since_state_.clear();
     publish_reactions();
   }
 }
@@ -461,6 +476,8 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   } else if (!strain_warning_.empty()) {
     stat.summary(DiagnosticStatus::WARN, strain_warning_);
     strain_warning_.clear();
+  } else if (!deep_contact_warning_.empty()) {
+    stat.summary(DiagnosticStatus::WARN, deep_contact_warning_);
   } else if (stability_margin_ > 1.0) {
     stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
                   stability_margin_);
@@ -490,6 +507,8 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("contacts", contacts ? contacts->stats().contacts : 0);
   stat.add("contacts carrying a force", contacts ? contacts->stats().active : 0);
   stat.add("largest penetration (m)", contacts ? contacts->stats().max_penetration : 0.0);
+  stat.add("deep contact since the last report", deep_contact_warning_);
+  deep_contact_warning_.clear();
   if (!robot_.empty())
     stat.addf("robot collision elements (in tf / all)", "%d / %d", robot_.active(),
               robot_.elements());

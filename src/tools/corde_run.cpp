@@ -251,6 +251,12 @@ int run(int argc, char** argv) {
     std::fprintf(stderr, "corde_run: guard: %s%s\n", fatal ? "UNRECOVERABLE: " : "",
                  e.message().c_str());
   };
+  // Deep contacts (a pinch, an obstacle moved into the rod), throttled by run_scene.
+  options.on_deep_contact = [&](double t, const std::string& report) {
+    if (quiet) return;
+    if (progress_shown) std::fprintf(stderr, "\r\033[K");
+    std::fprintf(stderr, "corde_run: deep contact at t = %.6g s: %s\n", t, report.c_str());
+  };
   corde::RunResult result;
   try {
     result = corde::run_scene(&scene, options);

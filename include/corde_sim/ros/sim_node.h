@@ -260,6 +260,11 @@ class SimNode {
   RobotObstacles robot_;
   // Contacts for rod_state: the largest penetration over the steps since the last message.
   double max_penetration_since_state_ = 0.0;
+  // And the deepest contact beyond deep_penetration (in radii, and its report), also for a
+  // throttled warning and the diagnostics.
+  double deepest_ratio_since_state_ = 0.0;
+  std::string deepest_contact_since_state_;
+  std::string deep_contact_warning_;
   int contact_arrows_ = 0;  // contact force arrows in the last marker array (to delete stale ones)
 };
 
