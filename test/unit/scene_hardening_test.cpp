@@ -12,6 +12,7 @@
 
 #include "corde_sim/scene.h"
 #include "corde_sim/scene_runner.h"
+#include "scene_test_util.h"
 
 #ifndef CORDE_SIM_SOURCE_DIR
 #define CORDE_SIM_SOURCE_DIR "."
@@ -20,26 +21,8 @@
 namespace corde {
 namespace {
 
-const char* kScene = R"(time_step: 1.0e-5
-duration: 0.002
-rods:
-  - name: cable
-    elements: 4
-    material: {preset: soft_cable, gamma_t: 0.2}
-    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], length: 0.2}
-    boundary:
-      - {clamp: start}
-)";
-
-// The message of the SceneError that parse_scene() throws ("" if it does not).
-std::string error_of(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
-  try {
-    parse_scene(yaml, overrides);
-  } catch (const SceneError& e) {
-    return e.what();
-  }
-  return "";
-}
+const char* const kScene = test::kClampedCable;
+using test::scene_error_of;
 
 std::string load_error(const std::string& path) {
   try {
@@ -196,8 +179,8 @@ TEST(SceneHardening, StepCountOverflowIsRefused) {
 
 TEST(SceneHardening, InfiniteAutomaticStepIsRefused) {
   // Such a degenerate rod (its automatic step was infinite) is now refused by its radius.
-  const std::string e =
-      error_of("rods:\n  - {material: soft_cable, radius: 1.0e-100, shape: {type: straight}}\n");
+  const std::string e = scene_error_of(
+      "rods:\n  - {material: soft_cable, radius: 1.0e-100, shape: {type: straight}}\n");
   EXPECT_EQ(e.rfind("rods[0].radius: must be >= 1e-06 m, got 1e-100", 0), 0u) << e;
 }
 
@@ -206,10 +189,11 @@ TEST(SceneHardening, InfiniteAutomaticStepIsRefused) {
 TEST(SceneHardening, DuplicateKeysAreRefusedWithBothLines) {
   std::string yaml = kScene;
   yaml.replace(yaml.find("    elements: 4\n"), 0, "    elements: 40\n");
-  EXPECT_EQ(error_of(yaml), "rods[0].elements: duplicate key (lines 5 and 6); give each key once");
-  EXPECT_EQ(error_of("duration: 1\nrods: []\nduration: 2\n"),
+  EXPECT_EQ(scene_error_of(yaml),
+            "rods[0].elements: duplicate key (lines 5 and 6); give each key once");
+  EXPECT_EQ(scene_error_of("duration: 1\nrods: []\nduration: 2\n"),
             "duration: duplicate key (lines 1 and 3); give each key once");
-  EXPECT_TRUE(contains(error_of(std::string(kScene) + "      - {clamp: end, clamp: end}\n"),
+  EXPECT_TRUE(contains(scene_error_of(std::string(kScene) + "      - {clamp: end, clamp: end}\n"),
                        "rods[0].boundary[1].clamp: duplicate key"));
 }
 
@@ -309,23 +293,25 @@ TEST(SceneHardening, DirectoryAndCrOnlyLineEndings) {
 TEST(SceneHardening, CountLimits) {
   std::string rods = "rods:\n";
   for (int i = 0; i < SceneLimits::max_rods + 1; ++i) rods += "  - {elements: 1}\n";
-  EXPECT_EQ(error_of(rods), "rods: has 1001 rods, more than the limit of 1000 (line 2)");
+  EXPECT_EQ(scene_error_of(rods), "rods: has 1001 rods, more than the limit of 1000 (line 2)");
   std::string loads = std::string(kScene) + "    loads:\n";
   for (int i = 0; i < SceneLimits::max_items + 1; ++i)
     loads += "      - {node: end, force: [0, 0, 1]}\n";
-  EXPECT_TRUE(contains(error_of(loads), "rods[0].loads: has 10001 loads, more than the limit"));
+  EXPECT_TRUE(
+      contains(scene_error_of(loads), "rods[0].loads: has 10001 loads, more than the limit"));
   std::string grasps = std::string(kScene) + "grasps:\n";
   for (int i = 0; i < SceneLimits::max_grasps + 1; ++i)
     grasps += "  - {name: g" + std::to_string(i) + "}\n";
-  EXPECT_TRUE(contains(error_of(grasps), "grasps: has 1001 grasps, more than the limit of 1000"));
+  EXPECT_TRUE(
+      contains(scene_error_of(grasps), "grasps: has 1001 grasps, more than the limit of 1000"));
 }
 
 TEST(SceneHardening, TotalElementsLimit) {
   // Two rods at the per-rod limit fill the scene's budget (about 1 s to build): a third is refused
   // before it is built.
   const std::string rod = "  - {material: soft_cable, elements: 100000, shape: {type: straight}}\n";
-  const std::string e =
-      error_of("rods:\n" + rod + rod + "  - {material: soft_cable, shape: {type: straight}}\n");
+  const std::string e = scene_error_of("rods:\n" + rod + rod +
+                                       "  - {material: soft_cable, shape: {type: straight}}\n");
   EXPECT_EQ(e,
             "rods[2]: the scene's rods would have 200050 elements together, more than the limit "
             "of 200000 (line 4)");
@@ -339,7 +325,7 @@ TEST(SceneHardening, HugeValuesAreNotEchoedWhole) {
        {"gravity: " + huge + "\n" + kScene,
         std::string(kScene) + "    reference_d1: " + huge + "\n",
         std::string(kScene) + "grasps:\n  - {name: g, rod: " + huge + "}\n"}) {
-    const std::string e = error_of(yaml);
+    const std::string e = scene_error_of(yaml);
     EXPECT_FALSE(e.empty());
     EXPECT_LT(e.size(), 400u) << e.substr(0, 400);
     EXPECT_TRUE(contains(e, "(1048576 characters)")) << e.substr(0, 400);
@@ -347,21 +333,22 @@ TEST(SceneHardening, HugeValuesAreNotEchoedWhole) {
 }
 
 TEST(SceneHardening, TopLevelThatIsNotAMapHasAPath) {
-  EXPECT_EQ(error_of("5\n", {"rods.0.elements=3"}),
+  EXPECT_EQ(scene_error_of("5\n", {"rods.0.elements=3"}),
             "scene (top level): is not a map, cannot set 'rods' (override 'rods.0.elements=3')");
-  EXPECT_EQ(error_of("- 1\n- 2\n").rfind("scene: expected a map of keys, got a list of 2", 0), 0u);
+  EXPECT_EQ(scene_error_of("- 1\n- 2\n").rfind("scene: expected a map of keys, got a list of 2", 0),
+            0u);
 }
 
 TEST(SceneHardening, IntegerLimitsAreNamed) {
-  EXPECT_TRUE(contains(error_of(kScene, {"rods.0.elements=2147483647"}),
+  EXPECT_TRUE(contains(scene_error_of(kScene, {"rods.0.elements=2147483647"}),
                        "rods[0].elements: must be <= 100000, got '2147483647'"));
-  EXPECT_TRUE(contains(error_of(kScene, {"rods.0.elements=1e300"}), "must be <= 100000"));
-  EXPECT_TRUE(contains(error_of(kScene, {"rods.0.elements=0"}), "must be >= 1, got '0'"));
-  EXPECT_TRUE(contains(error_of(kScene, {"rods.0.elements=2.5"}), "expected an integer"));
+  EXPECT_TRUE(contains(scene_error_of(kScene, {"rods.0.elements=1e300"}), "must be <= 100000"));
+  EXPECT_TRUE(contains(scene_error_of(kScene, {"rods.0.elements=0"}), "must be >= 1, got '0'"));
+  EXPECT_TRUE(contains(scene_error_of(kScene, {"rods.0.elements=2.5"}), "expected an integer"));
 }
 
 TEST(SceneHardening, TwiceOverriddenKeyBlamesTheOverrideInEffect) {
-  const std::string e = error_of(kScene, {"rods.0.elements=8", "rods.0.elements=-3"});
+  const std::string e = scene_error_of(kScene, {"rods.0.elements=8", "rods.0.elements=-3"});
   EXPECT_TRUE(contains(e, "(set by override 'rods.0.elements=-3')")) << e;
 }
 

@@ -15,33 +15,13 @@
 #include <vector>
 
 #include "corde_sim/scene.h"
+#include "scene_test_util.h"
 
 namespace corde {
 namespace {
 
-const char* kScene = R"(time_step: 1.0e-5
-duration: 0.002
-rods:
-  - name: cable
-    elements: 4
-    material: {preset: soft_cable, gamma_t: 0.2}
-    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], length: 0.2}
-    boundary:
-      - {clamp: start}
-)";
-
-// The message of the exception that parse_scene() throws: a SceneError's as is, any other
-// exception's marked as such ("" when it throws nothing).
-std::string error_of(const std::string& yaml, const std::vector<std::string>& overrides = {}) {
-  try {
-    parse_scene(yaml, overrides);
-  } catch (const SceneError& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    return std::string("NOT A SceneError: ") + e.what();
-  }
-  return "";
-}
+const char* const kScene = test::kClampedCable;
+using test::scene_error_of;
 
 bool starts_with(const std::string& text, const std::string& head) {
   return text.rfind(head, 0) == 0;
@@ -65,14 +45,14 @@ TEST(SceneInputBounds, DragProductsThatOverflowNameTheKey) {
   // Each value alone is accepted; their product (rho C_f pi r) overflowed to infinity and
   // Rod::set_drag threw std::invalid_argument, which aborted corde_run.
   const std::string f =
-      error_of(kScene, {"rods.0.drag={fluid_density: 1000, friction_coefficient: 1e308}"});
+      scene_error_of(kScene, {"rods.0.drag={fluid_density: 1000, friction_coefficient: 1e308}"});
   EXPECT_TRUE(starts_with(f, "rods[0].drag.friction_coefficient: ")) << f;
   const std::string d =
-      error_of(kScene, {"rods.0.drag={fluid_density: 1e308, drag_coefficient: 10}"});
+      scene_error_of(kScene, {"rods.0.drag={fluid_density: 1e308, drag_coefficient: 10}"});
   EXPECT_TRUE(starts_with(d, "rods[0].drag.fluid_density: ")) << d;
   // Sensible values still load.
-  EXPECT_EQ(error_of(kScene, {"rods.0.drag={fluid_density: 1.2, drag_coefficient: 1.2, "
-                              "friction_coefficient: 0.01}"}),
+  EXPECT_EQ(scene_error_of(kScene, {"rods.0.drag={fluid_density: 1.2, drag_coefficient: 1.2, "
+                                    "friction_coefficient: 0.01}"}),
             "");
 }
 
@@ -127,10 +107,10 @@ TEST(SceneInputBounds, AbsurdValuesAreRefusedNamingTheKey) {
       {"duration=1e300", "duration"},
   };
   for (const Case& c : cases) {
-    const std::string e = error_of(with_obstacle, {c.override_text});
+    const std::string e = scene_error_of(with_obstacle, {c.override_text});
     EXPECT_TRUE(starts_with(e, c.key + ": ")) << c.override_text << " -> " << e;
   }
-  EXPECT_EQ(error_of(with_obstacle), "");
+  EXPECT_EQ(scene_error_of(with_obstacle), "");
 }
 
 // A URDF link placed far away (its joint's origin) is refused by where it ends up, naming the
@@ -142,7 +122,7 @@ TEST(SceneInputBounds, ObstaclesPlacedFarAwayAreRefused) {
 <joint name="j" type="fixed"><parent link="base"/><child link="away"/>
 <origin xyz="1e6 0 0" rpy="0 0 0"/></joint></robot>)");
   const std::string e =
-      error_of(std::string(kScene) + "obstacles:\n  - {name: r, urdf: '" + urdf + "'}\n");
+      scene_error_of(std::string(kScene) + "obstacles:\n  - {name: r, urdf: '" + urdf + "'}\n");
   std::remove(urdf.c_str());
   EXPECT_TRUE(starts_with(e, "obstacles[0]")) << e;
 }
@@ -183,7 +163,7 @@ TEST(SceneInputFiles, FifoAsKeyframeFileIsRefusedAtOnce) {
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
   const std::string scene =
       std::string(kScene) + "      - {node: end, keyframes: {file: '" + fifo + "'}}\n";
-  const std::string e = within_seconds(5.0, fifo, [&] { return error_of(scene); });
+  const std::string e = within_seconds(5.0, fifo, [&] { return scene_error_of(scene); });
   std::remove(fifo.c_str());
   EXPECT_TRUE(starts_with(e, "rods[0].boundary[1].keyframes: ")) << e;
   EXPECT_TRUE(contains(e, "is not a regular file")) << e;
@@ -197,15 +177,15 @@ TEST(SceneInputFiles, DevicesAreRefused) {
     e = ex.what();
   }
   EXPECT_EQ(e, "/dev/zero: is not a regular file (a FIFO, socket or device), not a scene file");
-  e = error_of(std::string(kScene) + "      - {node: end, keyframes: {file: /dev/zero}}\n");
+  e = scene_error_of(std::string(kScene) + "      - {node: end, keyframes: {file: /dev/zero}}\n");
   EXPECT_TRUE(contains(e, "/dev/zero: is not a regular file")) << e;
 }
 
 TEST(SceneInputFiles, KeyframeFileSizeLimit) {
   const std::string path = temp_path("big.csv");
   write_file(path, "time,dx,dy,dz\n" + std::string(SceneLimits::max_keyframe_file_bytes, '#'));
-  const std::string e =
-      error_of(std::string(kScene) + "      - {node: end, keyframes: {file: '" + path + "'}}\n");
+  const std::string e = scene_error_of(std::string(kScene) +
+                                       "      - {node: end, keyframes: {file: '" + path + "'}}\n");
   std::remove(path.c_str());
   EXPECT_TRUE(contains(e, "larger than the limit of 1048576 bytes for a keyframe file")) << e;
 }
@@ -215,20 +195,21 @@ TEST(SceneInputFiles, KeyframeFileSizeLimit) {
 TEST(SceneInputMessages, KeyframeFileErrorsNameTheFileAndLine) {
   const std::string path = temp_path("order.csv");
   write_file(path, "time,dx,dy,dz\n# comment\n0.2,0,0,0.01\n0.1,0,0,0.02\n");
-  const std::string e =
-      error_of(std::string(kScene) + "      - {node: end, keyframes: {file: '" + path + "'}}\n");
+  const std::string e = scene_error_of(std::string(kScene) +
+                                       "      - {node: end, keyframes: {file: '" + path + "'}}\n");
   EXPECT_TRUE(starts_with(e, "rods[0].boundary[1].keyframes: '" + path + "' line 4: ")) << e;
   EXPECT_TRUE(contains(e, "times must increase strictly")) << e;
   // A keyframe at time 0 that is not the start pose: its line too.
   write_file(path, "time,dx,dy,dz\n0,0,0,0.01\n");
-  const std::string z =
-      error_of(std::string(kScene) + "      - {node: end, keyframes: {file: '" + path + "'}}\n");
+  const std::string z = scene_error_of(std::string(kScene) +
+                                       "      - {node: end, keyframes: {file: '" + path + "'}}\n");
   std::remove(path.c_str());
   EXPECT_TRUE(contains(z, "'" + path + "' line 2: ")) << z;
   // Keyframes in the scene: the item's path.
-  const std::string l = error_of(std::string(kScene) +
-                                 "      - {node: end, keyframes: [{time: 0.2, displacement: [0, "
-                                 "0, 0]}, {time: 0.1, displacement: [0, 0, 0]}]}\n");
+  const std::string l =
+      scene_error_of(std::string(kScene) +
+                     "      - {node: end, keyframes: [{time: 0.2, displacement: [0, "
+                     "0, 0]}, {time: 0.1, displacement: [0, 0, 0]}]}\n");
   EXPECT_TRUE(starts_with(l, "rods[0].boundary[1].keyframes[1]: times must increase strictly"))
       << l;
 }
@@ -253,7 +234,7 @@ TEST(SceneInputMessages, ByteOrderMarkIsAccepted) {
 
 TEST(SceneInputMessages, OverrideMessagesGiveTheKeyOnce) {
   const std::string scene = std::string(kScene) + "obstacles:\n  - {urdf: robot.urdf}\n";
-  const std::string e = error_of(scene, {"obstacles.0.urdf="});
+  const std::string e = scene_error_of(scene, {"obstacles.0.urdf="});
   EXPECT_TRUE(starts_with(e, "obstacles[0].urdf: ")) << e;
   EXPECT_EQ(e.find("obstacles[0].urdf", 1), std::string::npos) << e;
   EXPECT_TRUE(contains(e, "(set by override 'obstacles.0.urdf=')")) << e;
@@ -268,15 +249,15 @@ TEST(SceneInputMessages, RodStartingInsideAnObstacleIsRefused) {
            std::to_string(z) + "], size: [2, 2, 1]}\n";
   };
   // The rod's axis is at z = 1: the table's top at z + 0.5.
-  const std::string inside = error_of(scene_at(0.5 + 0.5 * r));
+  const std::string inside = scene_error_of(scene_at(0.5 + 0.5 * r));
   EXPECT_TRUE(starts_with(inside, "rods[0]: ")) << inside;
   EXPECT_TRUE(contains(inside, "starts inside obstacle 'table' (obstacles[0])")) << inside;
   EXPECT_TRUE(contains(inside, "0.0045 m deep")) << inside;
-  EXPECT_EQ(error_of(scene_at(0.5 - r)), "");          // resting on it
-  EXPECT_EQ(error_of(scene_at(0.5 - 0.995 * r)), "");  // within 1% of the radius
-  EXPECT_EQ(error_of(scene_at(0.5 - 0.98 * r)).rfind("rods[0]: ", 0), 0u);
+  EXPECT_EQ(scene_error_of(scene_at(0.5 - r)), "");          // resting on it
+  EXPECT_EQ(scene_error_of(scene_at(0.5 - 0.995 * r)), "");  // within 1% of the radius
+  EXPECT_EQ(scene_error_of(scene_at(0.5 - 0.98 * r)).rfind("rods[0]: ", 0), 0u);
   // Without obstacle contact for the rod, the overlap does not matter.
-  EXPECT_EQ(error_of(scene_at(0.5 + 0.5 * r), {"rods.0.contact={obstacles: false}"}), "");
+  EXPECT_EQ(scene_error_of(scene_at(0.5 + 0.5 * r), {"rods.0.contact={obstacles: false}"}), "");
 }
 
 }  // namespace
