@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 import unittest
 
 import rospy
@@ -108,6 +109,12 @@ class BadRobotUrdf(unittest.TestCase):
         r = self.sim.reset(self.scene_with('""'))
         self.assertFalse(r.success, r.message)
         self.assertIn("obstacles[0].urdf: the path is empty", r.message)
+        # A URDF of /dev/zero used to leave ~reset unanswered for a minute while memory grew.
+        t0 = time.time()
+        r = self.sim.reset(self.scene_with("/dev/zero"))
+        self.assertFalse(r.success, r.message)
+        self.assertIn("/dev/zero: is not a regular file", r.message)
+        self.assertLess(time.time() - t0, 5.0, "~reset took too long to refuse /dev/zero")
         # The simulation goes on.
         s0 = self.sim.fresh_state()
         self.assertIsNotNone(s0)
