@@ -73,7 +73,9 @@ TEST(ContactDeep, Bdf2ImpactStaysShallowAsImplicitEuler) {
 // state check refuses it, naming the rod and the obstacle. The same rod inside a moving obstacle
 // is not the integrator's fault (a link can pinch a cable): no guard problem, but reported.
 Scene inside_box(bool moving) {
-  return parse_scene(
+  // The loader refuses a rod that starts inside an obstacle: load it 0.2 m above the box, then
+  // move it in.
+  Scene s = parse_scene(
       std::string("time_step: 1.0e-4\n"
                   "integrator: implicit_euler\n"
                   "obstacles:\n"
@@ -86,8 +88,10 @@ Scene inside_box(bool moving) {
       "    elements: 20\n"
       "    radius: 0.003\n"
       "    material: soft_cable\n"
-      "    shape: {type: straight, start: [0, 0, 0], direction: [1, 0, 0], length: "
+      "    shape: {type: straight, start: [0, 0, 0.2], direction: [1, 0, 0], length: "
       "1.0}\n");
+  for (Vec3& x : s.world.rods()[0].positions()) x.z() -= 0.2;
+  return s;
 }
 
 TEST(ContactDeep, GuardRefusesGrossPenetrationOfStaticObstacle) {
