@@ -436,7 +436,11 @@ void ContactSystem::prepare_sweeps(const World& world) {
     wsum[k] = w;
     scratch_inv_w_[k] = w > 0.0 ? 1.0 / w : 0.0;
     if (any_cap_) {
-      cap_[k] = c.max_dv < kNoCap && w > 0.0 ? c.max_dv * scratch_inv_w_[k] : kNoCap;
+      // The cap bounds each node's velocity change, not only the contact point's: next to a held
+      // node the point moves by s times its free node's change, so a cap on the point alone would
+      // let that node take max_dv / s. (Capped contacts are with obstacles: no rod b.)
+      const double node_w = std::max((1 - c.s_a) * wa[c.seg_a], c.s_a * wa[c.seg_a + 1]);
+      cap_[k] = c.max_dv < kNoCap && node_w > 0.0 ? c.max_dv / node_w : kNoCap;
       c.pn = std::min(c.pn, cap_[k]);
     }
     contact_levers_[k].count = 0;
@@ -716,8 +720,21 @@ void ContactSystem::detect(World& world, double h) {
     stats_.max_penetration = -c.gap;
     stats_.deepest = static_cast<int>(k);
   }
-  // Deep contacts, searched only when the deepest contact can be one.
   any_cap_ = false;
+  // A moving obstacle against a segment with one held (driven) node: the contact point moves only
+  // by the free node's share, so stopping the obstacle's approach there can need many times its
+  // speed at that node (a link sweeping through the segment next to a gripper launched the cable).
+  // Bound the node's velocity change as for deep contacts below.
+  for (Contact& c : contacts_) {
+    if (c.rod_b >= 0 || !obs->obstacle(c.obstacle).moving) continue;
+    const Rod& rod = rods[c.rod_a];
+    if (!rod.node_drive(c.seg_a) == !rod.node_drive(c.seg_a + 1)) continue;  // none or both held
+    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
+                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
+    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
+    any_cap_ = true;
+  }
+  // Deep contacts, searched only when the deepest contact can be one.
   double r_min = INFINITY;
   for (const Rod& rod : rods) r_min = std::min(r_min, rod.section().radius);
   if (!(stats_.max_penetration > cs.deep_penetration * r_min)) return;
