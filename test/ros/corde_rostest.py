@@ -43,6 +43,13 @@ class Recorder:
         with self.lock:
             return [m for (t, m) in self.items if since is None or t >= since]
 
+    def max_gap(self, since, until):
+        """The longest wall time (s) without a message between `since` and `until`."""
+        with self.lock:
+            times = [t for (t, _) in self.items if since <= t <= until]
+        points = [since] + times + [until]
+        return max(b - a for a, b in zip(points, points[1:]))
+
     def clear(self):
         with self.lock:
             self.items = []

@@ -21,12 +21,6 @@ ECHO = 100  # characters of an input a reply may echo
 REPLY_MAX = 600  # characters: a reply echoing a clipped input and its explanation
 
 
-def max_gap(recorder, since, until):
-    times = [t for (t, _) in recorder.items if since <= t <= until]
-    points = [since] + times + [until]
-    return max(b - a for a, b in zip(points, points[1:]))
-
-
 class NodeLimits(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -53,7 +47,7 @@ class NodeLimits(unittest.TestCase):
         self.assertIn("queued", r.message)
         time.sleep(1.5)
         until = time.monotonic()
-        gap = max_gap(self.sim.state, since, until)
+        gap = self.sim.state.max_gap(since, until)
         self.assertLess(gap, 0.3, "rod_state silent for %.2f s during a queued ~step" % gap)
         states = self.sim.state.messages(since)
         self.assertGreater(states[-1].sim_time, r.time)  # the queue runs while paused

@@ -10,12 +10,6 @@ import rostest
 import corde_rostest as ct
 
 
-def max_gap(recorder, since, until):
-    times = [t for (t, _) in recorder.items if since <= t <= until]
-    points = [since] + times + [until]
-    return max(b - a for a, b in zip(points, points[1:]))
-
-
 class StepCost(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -35,7 +29,7 @@ class StepCost(unittest.TestCase):
         time.sleep(1.5)
         until = time.monotonic()
         for rec, name in [(self.sim.state, "rod_state"), (self.sim.tf, "tf")]:
-            gap = max_gap(rec, since, until)
+            gap = rec.max_gap(since, until)
             self.assertLess(gap, 0.5, "%s silent for %.2f s" % (name, gap))
         s = self.sim.fresh_state()
         self.assertEqual(len(s.rods[0].nodes), len(s0.rods[0].nodes))
