@@ -37,10 +37,9 @@ struct GraspState {
   // The holder's pose with the twist turned in: holder * offset * Rz(angle) * offset^-1.
   Eigen::Isometry3d holder_pose() const;
 
-  // State of the held items at the start of the current step (for the reaction).
-  Vec3 v0[2] = {Vec3::Zero(), Vec3::Zero()}, x0[2] = {Vec3::Zero(), Vec3::Zero()};
-  Vec3 w0 = Vec3::Zero(), origin0 = Vec3::Zero();
-  Quat q0 = Quat::Identity();
+  // The held nodes and the holder's origin at the start of the current step (the reaction's
+  // moment arms).
+  Vec3 x0[2] = {Vec3::Zero(), Vec3::Zero()}, origin0 = Vec3::Zero();
 };
 
 class GraspSet {

@@ -173,6 +173,9 @@ class Rod {
   void forces_block(int b0, int b1, double t, const Vec3& gravity);
   void integrate_block(int b0, int b1, double h, Integrator integrator);
   void apply_drives(double t_end, double h);
+  // The ghost elements' torques on the end segments at the current state into
+  // GhostFrame::reaction, as forces_block records them (the implicit step's, at its end).
+  void record_ghost_reactions();
   void drag_block(int node0, int node1);
 
   std::string name_;

@@ -181,12 +181,7 @@ void GraspSet::before_step(World& world, double t, double h) {
     Rod& rod = world.rods()[g.rod];
     const int s = g.grasp.segment;
     g.origin0 = g.holder_pose().translation();
-    for (int k = 0; k < 2; ++k) {
-      g.x0[k] = rod.positions()[s + k];
-      g.v0[k] = rod.velocities()[s + k];
-    }
-    g.w0 = rod.angular_velocities()[s];
-    g.q0 = rod.orientations()[s];
+    for (int k = 0; k < 2; ++k) g.x0[k] = rod.positions()[s + k];
     // A holder at rest with nothing turning leaves the drives as they are (their targets hold).
     if (!g.holder.moving() && g.twist_rate == 0.0 && !g.hold_pending) continue;
     const HolderClip c = g.holder.advance(t, h, limits);
@@ -200,10 +195,12 @@ void GraspSet::before_step(World& world, double t, double h) {
 }
 
 void GraspSet::after_step(const World& world, double h) {
-  // What the holder had to apply so that the held items moved as they did, from their equations of
-  // motion over the step (the forces were computed at its start): F_holder = m a - f on each
-  // node, tau_holder = J dw/dt + w x J w - tau on the segment (body frame). The rod exerts the
-  // opposite on the holder.
+  (void)h;  // the drives' reactions are per step already
+  // The rod exerts on the holder the opposite of what the grasp's drives exerted on the held
+  // items over the step: their reactions (boundary.h), which every integrator records with one
+  // meaning, m dv/dt - f on each node and J dw/dt + w x J w - tau on the segment (the implicit
+  // methods: the residual of those equations at the step's end). The nodes' forces act about the
+  // holder's origin at the step's start.
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (!g.held) continue;
@@ -211,17 +208,13 @@ void GraspSet::after_step(const World& world, double h) {
     const int s = g.grasp.segment;
     Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
     for (int k = 0; k < 2; ++k) {
-      const int i = s + k;
-      const Vec3 f = rod.forces()[i] - rod.node_masses()[i] * (rod.velocities()[i] - g.v0[k]) / h;
-      force += f;
-      torque += (g.x0[k] - g.origin0).cross(f);
+      const NodeDrive* d = rod.node_drive(s + k);
+      if (!d) continue;
+      force -= d->reaction;
+      torque -= (g.x0[k] - g.origin0).cross(d->reaction);
     }
-    if (g.grasp.hold_orientation) {
-      const Vec3 J = rod.segment_inertia(s);
-      const Vec3 dw = (rod.angular_velocities()[s] - g.w0) / h;
-      const Vec3 body = rod.torques()[s] - J.cwiseProduct(dw) - g.w0.cross(J.cwiseProduct(g.w0));
-      torque += g.q0 * body;
-    }
+    if (g.grasp.hold_orientation)
+      if (const SegmentDrive* d = rod.segment_drive(s)) torque -= d->reaction;
     g.reaction_force_sum += force;
     g.reaction_torque_sum += torque;
     ++g.reaction_steps;

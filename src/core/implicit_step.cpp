@@ -332,6 +332,9 @@ void ImplicitEuler::record_reactions(Rod& rod) {
     const Vec3 r = g_.segment<3>(RodSystem::segment_index(c.segment));
     c.reaction = q[c.segment] * Vec3(r - proj_[2 * c.segment + 1] * r);
   }
+  // A ghost clamp's moment is its element's torque on the end segment (an elastic term of the
+  // residual, not a support's unknown): at the step's end, with the frame at the step's end.
+  rod.record_ghost_reactions();
 }
 
 void ImplicitEuler::remember_end(const Rod& rod) {

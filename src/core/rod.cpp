@@ -671,6 +671,22 @@ void Rod::integrate(double t, double h, Integrator integrator) {
   apply_drives(t + h, h);
 }
 
+void Rod::record_ghost_reactions() {
+  const int n = num_segments();
+  const double kb = section_.bend, kt = section_.twist;
+  double ta[3], tb[3];
+  if (ghost_[0].active) {
+    bend_element(ghost_[0].frame.coeffs().data(), q_[0].coeffs().data(), 0.5 * rest_[0],
+                 2.0 / rest_[0], kb, kt, ghost_[0].uhat.data(), ta, tb);
+    ghost_[0].reaction = q_[0] * Vec3(tb[0], tb[1], tb[2]);
+  }
+  if (ghost_[1].active) {
+    bend_element(q_[n - 1].coeffs().data(), ghost_[1].frame.coeffs().data(), 0.5 * rest_[n - 1],
+                 2.0 / rest_[n - 1], kb, kt, ghost_[1].uhat.data(), ta, tb);
+    ghost_[1].reaction = q_[n - 1] * Vec3(ta[0], ta[1], ta[2]);
+  }
+}
+
 // Sets the kinematic items to their drives' state at the step's end and projects the
 // constrained ones; each records the force or torque it took (a reaction, what a load cell in the
 // support reads with the opposite sign): m dv/dt - f for a node, I dw/dt + w x I w - tau for a

@@ -307,9 +307,9 @@ void StepGuard::add_step_work(const World& world, double h) {
     for (const SegmentDrive& d : rod.segment_drives())
       w += std::abs(d.reaction.dot(q[d.segment] * om[d.segment])) * h;
     // A moving clamp's ghost frame works on its boundary element: the element's energy change
-    // from the frame's turn over the step, the rod held at its end-of-step state. Taken from the
-    // state, since only the explicit step records the element's torque (GhostFrame::reaction):
-    // under the implicit methods the torque times the turn counted nothing.
+    // from the frame's turn over the step, the rod held at its end-of-step state (exact for a
+    // large turn, where the torque times the turn is not; the torque, GhostFrame::reaction, is
+    // recorded at a different point of the step by the explicit and the implicit methods).
     const int n = rod.num_segments();
     for (int end = 0; end < 2; ++end) {
       const GhostFrame& g = end == 0 ? rod.ghost_start() : rod.ghost_end();
