@@ -721,6 +721,15 @@ void ContactSystem::detect(World& world, double h) {
     stats_.deepest = static_cast<int>(k);
   }
   any_cap_ = false;
+  // A bounded contact with a moving obstacle: its normal impulse may change a node's velocity
+  // relative to the surface by no more than stopping its approach and separating at
+  // max_push_speed.
+  auto bound_by_approach = [&](Contact& c) {
+    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
+                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
+    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
+    any_cap_ = true;
+  };
   // A moving obstacle against a segment with one held (driven) node: the contact point moves only
   // by the free node's share, so stopping the obstacle's approach there can need many times its
   // speed at that node (a link sweeping through the segment next to a gripper launched the cable).
@@ -729,10 +738,7 @@ void ContactSystem::detect(World& world, double h) {
     if (c.rod_b >= 0 || !obs->obstacle(c.obstacle).moving) continue;
     const Rod& rod = rods[c.rod_a];
     if (!rod.node_drive(c.seg_a) == !rod.node_drive(c.seg_a + 1)) continue;  // none or both held
-    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
-                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
-    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
-    any_cap_ = true;
+    bound_by_approach(c);
   }
   // Deep contacts, searched only when the deepest contact can be one.
   double r_min = INFINITY;
@@ -743,17 +749,13 @@ void ContactSystem::detect(World& world, double h) {
     const double ratio = -c.gap / rods[c.rod_a].section().radius;
     if (!(ratio > cs.deep_penetration)) continue;
     stats_.max_ratio = std::max(stats_.max_ratio, ratio);
-    // A deep contact with a moving obstacle (the obstacle made it): its normal impulse alone may
-    // change the rod's velocity relative to the surface by no more than stopping its approach and
-    // separating at max_push_speed. Where two surfaces closing on a rod demand opposite velocities
-    // (a pinch) their impulses would otherwise grow without bound over the sweeps and launch the
-    // rod. Deep contacts the solver made (a fast impact on a static obstacle, rods springing
-    // against each other) are not bounded: their impulses are needed to stop the motion.
+    // A deep contact with a moving obstacle (the obstacle made it) is bounded. Where two surfaces
+    // closing on a rod demand opposite velocities (a pinch) their impulses would otherwise grow
+    // without bound over the sweeps and launch the rod. Deep contacts the solver made (a fast
+    // impact on a static obstacle, rods springing against each other) are not bounded: their
+    // impulses are needed to stop the motion.
     if (c.rod_b >= 0 || !obs->obstacle(c.obstacle).moving) continue;
-    const Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] +
-                    c.s_a * velocity_[c.rod_a][c.seg_a + 1] - c.surface_velocity;
-    c.max_dv = std::max(0.0, -vr.dot(c.normal)) + cs.max_push_speed;
-    any_cap_ = true;
+    bound_by_approach(c);
   }
 }
 
