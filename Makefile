@@ -16,6 +16,10 @@ BUILD_TYPE ?= Release
 JOBS       ?= $(shell nproc 2>/dev/null || echo 2)
 PYTHON     ?= /usr/bin/python3
 CMAKE_ARGS ?=
+# CORDE_WERROR=ON (CI) builds with warnings as errors.
+ifdef CORDE_WERROR
+  CMAKE_ARGS += -DCORDE_WERROR=$(CORDE_WERROR)
+endif
 CTEST_ARGS ?=
 BENCH_ARGS ?=
 # The main job: the node on its default scene, with rviz when a display is there (DISPLAY set).
@@ -70,7 +74,7 @@ charts: build-main
 	$(PYTHON) scripts/plot_charts.py docs/charts
 
 format:
-	@command -v clang-format >/dev/null || bash scripts/install_deps.sh --dev
+	@command -v clang-format >/dev/null || bash scripts/install_deps.sh
 	find src include test \( -name '*.cpp' -o -name '*.h' -o -name '*.hpp' \) -print0 2>/dev/null \
 	  | xargs -0 -r clang-format -i
 

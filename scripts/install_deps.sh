@@ -8,7 +8,6 @@
 # resolve (ROS needs both; a minimal system may lack /etc/hosts).
 #
 #   scripts/install_deps.sh          # build, test and run dependencies
-#   scripts/install_deps.sh --dev    # also developer tools (clang-format)
 #   scripts/install_deps.sh --list   # print the package list and exit
 set -euo pipefail
 
@@ -19,6 +18,8 @@ packages=(
   libeigen3-dev libyaml-cpp-dev libfcl-dev liburdfdom-dev libassimp-dev libtinyxml2-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the formatting check (ctest format_check)
+  clang-format
   # the scene reader's fuzz test (libFuzzer comes with libclang-rt-dev, only recommended by clang)
   clang libclang-rt-dev
   # ROS 1 (Debian packages): build system, message generation, C++ client libraries
@@ -48,11 +49,9 @@ packages=(
   # validation references (scripts/timoshenko_frequencies.py)
   python3-scipy
 )
-dev_packages=(clang-format)
 
 for arg in "$@"; do
   case "$arg" in
-    --dev) packages+=("${dev_packages[@]}") ;;
     --list) printf '%s\n' "${packages[@]}"; exit 0 ;;
     -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "install_deps.sh: unknown option '$arg'" >&2; exit 2 ;;

@@ -4,7 +4,7 @@ limit of the CoRdE rod (shear stiffness kappa = G A, rotary inertia rho I), agai
 Euler-Bernoulli.
 
 Independent of the C++ code (scipy shooting + brentq); its ratios are the reference constants in
-test/unit/frequency_test.cpp and test/unit/accuracy_test.cpp. Run: scripts/timoshenko_frequencies.py
+test/validation/frequency_test.cpp and test/validation/accuracy_test.cpp. Run: scripts/timoshenko_frequencies.py
 """
 import numpy as np
 from scipy.integrate import solve_ivp

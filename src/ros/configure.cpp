@@ -5,9 +5,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "corde_sim/rod_edit.h"
+#include "corde_sim/rod/rod_edit.h"
 #include "corde_sim/ros/input_checks.h"
-#include "corde_sim/stability.h"
+#include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde_sim {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "corde_sim/rod.h"
+#include "corde_sim/rod/rod.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_checks.h"
 

@@ -12,7 +12,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "corde_sim/stability.h"
+#include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde_sim {
 

@@ -5,10 +5,10 @@
 
 #include <filesystem>
 
-#include "corde_sim/file_read.h"
+#include "corde_sim/io/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
-#include "corde_sim/scene.h"
+#include "corde_sim/scene/scene.h"
 
 namespace corde_sim {
 

@@ -3,10 +3,10 @@
 #include <cmath>
 #include <limits>
 
-#include "corde_sim/file_read.h"
+#include "corde_sim/io/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
-#include "corde_sim/stability.h"
+#include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde_sim {
 namespace {

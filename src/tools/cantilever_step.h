@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "chart_stepper.h"
-#include "corde_sim/material.h"
-#include "corde_sim/rod.h"
-#include "corde_sim/rod_shape.h"
-#include "corde_sim/stability.h"
+#include "corde_sim/rod/material.h"
+#include "corde_sim/rod/rod.h"
+#include "corde_sim/rod/rod_shape.h"
+#include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde {
 namespace v8 {

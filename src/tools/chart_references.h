@@ -6,9 +6,9 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "corde_sim/material.h"
-#include "corde_sim/rod.h"
-#include "corde_sim/rod_shape.h"
+#include "corde_sim/rod/material.h"
+#include "corde_sim/rod/rod.h"
+#include "corde_sim/rod/rod_shape.h"
 
 namespace corde {
 namespace charts {

@@ -9,7 +9,7 @@
 #include "cantilever_step.h"
 #include "chart_references.h"
 #include "chart_stepper.h"
-#include "corde_sim/stability.h"
+#include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde {
 namespace charts {

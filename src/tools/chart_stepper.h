@@ -6,8 +6,8 @@
 #include <ctime>
 #include <string>
 
-#include "corde_sim/implicit_step.h"
-#include "corde_sim/rod.h"
+#include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/rod/rod.h"
 
 namespace corde {
 namespace charts {

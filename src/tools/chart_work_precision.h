@@ -11,8 +11,8 @@
 #include "cantilever_step.h"
 #include "chart_references.h"
 #include "chart_stepper.h"
-#include "corde_sim/stability.h"
-#include "corde_sim/statics.h"
+#include "corde_sim/stability/explicit_step_limit.h"
+#include "corde_sim/statics/statics.h"
 
 namespace corde {
 namespace charts {

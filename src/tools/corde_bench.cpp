@@ -65,19 +65,19 @@
 #include <utility>
 #include <vector>
 
-#include "corde_sim/grasp.h"
-#include "corde_sim/implicit_step.h"
-#include "corde_sim/material.h"
-#include "corde_sim/obstacle.h"
-#include "corde_sim/rod.h"
-#include "corde_sim/rod_shape.h"
-#include "corde_sim/rod_system.h"
-#include "corde_sim/scene.h"
-#include "corde_sim/scene_statics.h"
-#include "corde_sim/stability.h"
-#include "corde_sim/statics.h"
-#include "corde_sim/step_guard.h"
-#include "corde_sim/world.h"
+#include "corde_sim/contact/obstacle.h"
+#include "corde_sim/grasp/grasp.h"
+#include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/model/rod_system.h"
+#include "corde_sim/rod/material.h"
+#include "corde_sim/rod/rod.h"
+#include "corde_sim/rod/rod_shape.h"
+#include "corde_sim/scene/scene.h"
+#include "corde_sim/stability/explicit_step_limit.h"
+#include "corde_sim/stability/step_guard.h"
+#include "corde_sim/statics/scene_statics.h"
+#include "corde_sim/statics/statics.h"
+#include "corde_sim/world/world.h"
 
 namespace {
 
@@ -676,7 +676,7 @@ StepSystem make_step_system(int n) {
 // M/h^2 + H with the clamp and the unused slot fixed.
 void step_matrix(const Rod& rod, double h, corde::BlockTridiag* a) {
   corde::RodSystem sys{&rod, kGravity};
-  sys.definite = true;  // as an implicit step uses it (rod_system.h)
+  sys.definite = true;  // as an implicit step uses it (model/rod_system.h)
   sys.hessian(a);
   for (int i = 0; i < rod.num_nodes(); ++i)
     a->diag[i].topLeftCorner<3, 3>().diagonal().array() += rod.node_masses()[i] / (h * h);
@@ -969,9 +969,9 @@ BENCHMARK(BM_DynamicRelaxation)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::
 
 BENCHMARK_MAIN();
 
-// The stability guard's overhead (step_guard.h): a check, an energy evaluation and a copy of the
-// world per 64 steps, plus the per-step work bound, on the default scene's cord softened and run
-// explicitly (E_s 50 MPa, kappa 0.2 G A, split_rotation at 65 us: the cheapest step, where the
+// The stability guard's overhead (stability/step_guard.h): a check, an energy evaluation and a copy
+// of the world per 64 steps, plus the per-step work bound, on the default scene's cord softened and
+// run explicitly (E_s 50 MPa, kappa 0.2 G A, split_rotation at 65 us: the cheapest step, where the
 // guard's fixed costs weigh most) with its gripper held: 0.2 s (3053 steps) per iteration of
 // bare World::step (0) or StepGuard::step (1).
 void BM_GuardOverhead(benchmark::State& state) {

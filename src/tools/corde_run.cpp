@@ -11,9 +11,9 @@
 #include <utility>
 #include <vector>
 
-#include "corde_sim/scene.h"
-#include "corde_sim/scene_runner.h"
-#include "corde_sim/scene_statics.h"
+#include "corde_sim/scene/scene.h"
+#include "corde_sim/scene/scene_runner.h"
+#include "corde_sim/statics/scene_statics.h"
 
 namespace {
 

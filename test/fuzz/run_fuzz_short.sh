@@ -15,13 +15,15 @@ work=$3
 arg=${4:-20}
 case "$target" in
   scene)
-    sources=("$src"/src/core/*.cpp "$src"/test/fuzz/scene_fuzz.cpp)
+    mapfile -t sources < <(find "$src/src/core" -name "*.cpp" | sort)
+    sources+=("$src/test/fuzz/scene_fuzz.cpp")
     libs=(-lyaml-cpp -lfcl -lccd -lassimp -lurdfdom_model -lconsole_bridge -ltinyxml2)
     seeds=("$src/test/fuzz/corpus" "$src/config/scenes")
     export CORDE_FUZZ_FIXTURES="$src/test/fuzz/fixtures" ;;
   urdf)
     # Only the library files the URDF reader needs.
-    sources=("$src"/src/core/{urdf_obstacles,urdf_checks,file_read}.cpp "$src"/test/fuzz/urdf_fuzz.cpp)
+    sources=("$src"/src/core/contact/{urdf_obstacles,urdf_checks}.cpp "$src"/src/core/io/file_read.cpp
+      "$src"/test/fuzz/urdf_fuzz.cpp)
     libs=(-lassimp -lurdfdom_model -lconsole_bridge -ltinyxml2)
     seeds=("$src/test/fuzz/corpus_urdf") ;;
   *) echo "run_fuzz_short.sh: unknown target '$target' (scene or urdf)"; exit 2 ;;
@@ -49,7 +51,7 @@ bin="$work/${target}_fuzz"
 flags="-std=c++17 -O1 -g -fsanitize=fuzzer-no-link,address,undefined"
 flags="$flags -fno-sanitize-recover=undefined -I$src/include -isystem /usr/include/eigen3"
 # The library's own headers only: the ROS adapter's (include/corde_sim/ros/) are not compiled here.
-newest_header=$({ find "$src/include/corde_sim" -maxdepth 1 -name "*.h" -printf "%T@ %p\n";
+newest_header=$({ find "$src/include/corde_sim" -path "*/ros" -prune -o -name "*.h" -printf "%T@ %p\n";
   find "$src/src/core" -name "*.h" -printf "%T@ %p\n"; } | sort -n | tail -n 1 | cut -d" " -f2-)
 stale=""
 objects=()

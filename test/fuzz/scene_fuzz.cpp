@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "corde_sim/scene.h"
+#include "corde_sim/scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // Lines after a line "--- overrides" are overrides ("key.path=value"), to fuzz those too.

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "corde_sim/urdf_obstacles.h"
+#include "corde_sim/contact/urdf_obstacles.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

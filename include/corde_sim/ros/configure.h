@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "corde_sim/material.h"
-#include "corde_sim/world.h"
+#include "corde_sim/rod/material.h"
+#include "corde_sim/world/world.h"
 
 namespace corde_sim {
 

@@ -19,7 +19,7 @@
 
 #include "corde_sim/WorldState.h"
 #include "corde_sim/ros/node_params.h"
-#include "corde_sim/world.h"
+#include "corde_sim/world/world.h"
 
 namespace corde_sim {
 

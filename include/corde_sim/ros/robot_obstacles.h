@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "corde_sim/obstacle.h"
+#include "corde_sim/contact/obstacle.h"
+#include "corde_sim/contact/urdf_obstacles.h"
 #include "corde_sim/ros/obstacle_glide.h"
-#include "corde_sim/urdf_obstacles.h"
 
 namespace corde_sim {
 

@@ -35,9 +35,9 @@
 #include "corde_sim/Reset.h"
 #include "corde_sim/Step.h"
 #include "corde_sim/WorldState.h"
-#include "corde_sim/grasp.h"
-#include "corde_sim/grasp_commands.h"
-#include "corde_sim/grasp_set.h"
+#include "corde_sim/grasp/grasp.h"
+#include "corde_sim/grasp/grasp_commands.h"
+#include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_events.h"
 #include "corde_sim/ros/node_params.h"
@@ -45,8 +45,8 @@
 #include "corde_sim/ros/outputs.h"
 #include "corde_sim/ros/pacer.h"
 #include "corde_sim/ros/robot_obstacles.h"
-#include "corde_sim/scene.h"
-#include "corde_sim/step_guard.h"
+#include "corde_sim/scene/scene.h"
+#include "corde_sim/stability/step_guard.h"
 
 namespace corde_sim {
 

@@ -1,0 +1,104 @@
+// The grasps on the rods of a world (no ROS): each holds one segment with a rigid holder whose
+// motion is limited in speed and acceleration (holder.h), can twist the segment about its
+// tangent, can push it with a wrench, and measures the wrench the rod exerts on the holder (what
+// a force-torque sensor in the gripper would read).
+//
+// Per step: before_step() moves the holders and drives the held segments, World::step() steps,
+// after_step() accumulates the reactions. Every time argument is the world's own time
+// (World::time()), which before_step() also gets.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <map>
+#include <string>
+
+#include "corde_sim/grasp/grasp.h"
+#include "corde_sim/grasp/holder.h"
+#include "corde_sim/world/world.h"
+
+namespace corde {
+
+struct GraspState {
+  GraspSpec spec;  // as requested (a resample turns it into the arc length below)
+  Grasp grasp;     // rod name, segment, offset (segment pose in the holder frame)
+  int rod = 0;     // index into World::rods()
+  bool held = true;
+  HolderMotion holder;
+  double twist_rate = 0.0;                           // rad/s about the held segment's tangent
+  double twist_angle = 0.0;                          // rad accumulated, in (-pi, pi]
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // applied wrench, world frame, at the midpoint
+  double arc_length = 0.0;   // rest arc length of the grasped segment's midpoint (m)
+  HolderClip clip;           // limits hit since the caller last cleared it
+  bool hold_pending = true;  // the drives must be set again at the next step
+  // Reaction: force on the holder and torque about its origin, world frame, summed over steps.
+  Vec3 reaction_force_sum = Vec3::Zero(), reaction_torque_sum = Vec3::Zero();
+  long reaction_steps = 0;
+
+  // The holder's pose with the twist turned in: holder * offset * Rz(angle) * offset^-1.
+  Eigen::Isometry3d holder_pose() const;
+
+  // The held nodes and the holder's origin at the start of the current step (the reaction's
+  // moment arms).
+  Vec3 x0[2] = {Vec3::Zero(), Vec3::Zero()}, origin0 = Vec3::Zero();
+};
+
+class GraspSet {
+ public:
+  HolderLimits limits;
+
+  // "" if the spec can be grasped in `world` (its rod exists, the place is on it, no boundary
+  // condition holds the segment's nodes or orientation, and no other held grasp holds that
+  // segment or a neighbour sharing one of its nodes, which would leave two holders driving one
+  // node); otherwise why not. Sets *rod and *segment when it can.
+  std::string check(const World& world, const GraspSpec& spec, int* rod, int* segment) const;
+
+  // Grasps the spec with a holder at `holder` at time `now`. Without an offset the segment keeps
+  // its pose relative to the holder (nothing moves). With one, the segment is held at
+  // holder * offset: the holder starts where that puts the segment now and moves to `holder`
+  // within the limits. A released grasp of the same name is replaced; a held one is an error.
+  std::string add(World& world, const GraspSpec& spec, const Eigen::Isometry3d& holder,
+                  const Eigen::Isometry3d* offset, double now);
+  // Lets go; the wrench keeps acting on the rod. Returns false if no held grasp has that name.
+  bool release(World& world, const std::string& name);
+  // Holds the grasp's segment again from a new holder pose: the offset is re-recorded (no offset)
+  // or the holder glides there (an offset), as in add().
+  void attach(World& world, const std::string& name, const Eigen::Isometry3d& holder,
+              const Eigen::Isometry3d* offset, double now);
+  void clear() { grasps_.clear(); }
+  // Forgets a grasp (the caller's choice: one released, without a wrench, so the world is
+  // unaffected). Returns whether it was there.
+  bool erase(const std::string& name) { return grasps_.erase(name) > 0; }
+
+  GraspState* find(const std::string& name);
+  const GraspState* find(const std::string& name) const;
+  const std::map<std::string, GraspState>& grasps() const { return grasps_; }
+  bool empty() const { return grasps_.empty(); }
+
+  // Inputs. Each ignores a name it does not hold.
+  void set_goal(const std::string& name, double now, const Eigen::Isometry3d& pose,
+                double duration);
+  void set_wrench(World& world, const std::string& name, const Vec3& force, const Vec3& torque);
+  void set_twist_rate(const std::string& name, double rate);
+  // Every holder stops where it is (after the state was restored from a snapshot).
+  void stop_all();
+
+  // Around World::step() (from t to t + h). Allocate nothing.
+  void before_step(World& world, double t, double h);
+  void after_step(const World& world, double h);
+
+  // Mean reaction since the last call in the frame of the holder's current pose (holder_pose(),
+  // the twist turned in): the force the rod exerts on the holder and its torque about the
+  // holder's origin. False when no step was
+  // taken since (nothing to report).
+  bool take_reaction(const std::string& name, Vec3* force, Vec3* torque);
+
+  // After rod `rod` was resampled (its segment indices changed): every grasp on it holds the
+  // segment at its material coordinate again, the holders where they are.
+  void remake_on(World& world, int rod);
+
+ private:
+  void apply_wrenches(World& world, int rod) const;
+  std::map<std::string, GraspState> grasps_;
+};
+
+}  // namespace corde

@@ -1,0 +1,257 @@
+#include "corde_sim/grasp/grasp_set.h"
+
+#include <cmath>
+
+namespace corde {
+namespace {
+
+// Rest arc length of a segment's midpoint (its material coordinate).
+double midpoint_arc_length(const Rod& rod, int segment) {
+  double s = 0.0;
+  for (int i = 0; i < segment; ++i) s += rod.rest_lengths()[i];
+  return s + 0.5 * rod.rest_lengths()[segment];
+}
+
+}  // namespace
+
+Eigen::Isometry3d GraspState::holder_pose() const {
+  if (twist_angle == 0.0) return holder.pose();
+  const Eigen::Isometry3d spin(Eigen::AngleAxisd(twist_angle, Vec3::UnitZ()));
+  return holder.pose() * grasp.offset * spin * grasp.offset.inverse();
+}
+
+std::string GraspSet::check(const World& world, const GraspSpec& spec, int* rod_index,
+                            int* segment) const {
+  int ri = -1;
+  for (size_t i = 0; i < world.rods().size(); ++i)
+    if (world.rods()[i].name() == spec.rod) ri = static_cast<int>(i);
+  if (ri < 0) return "no rod named '" + spec.rod + "'";
+  const Rod& rod = world.rods()[ri];
+  int seg;
+  try {
+    seg = grasp_segment(rod, spec);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  // Drives other than the grasps' own (kTarget) are boundary conditions: a grasp would replace
+  // them, and its release would free a clamped node.
+  for (int node : {seg, seg + 1}) {
+    const NodeDrive* d = rod.node_drive(node);
+    if (d && d->kind != NodeDrive::Kind::kTarget)
+      return "node " + std::to_string(node) + " of segment " + std::to_string(seg) + " of rod '" +
+             spec.rod + "' has a boundary condition";
+  }
+  for (const NodeConstraint& c : rod.node_constraints())
+    if (c.node == seg || c.node == seg + 1)
+      return "node " + std::to_string(c.node) + " of segment " + std::to_string(seg) + " of rod '" +
+             spec.rod + "' slides on a line or plane (a boundary condition)";
+  for (const SegmentConstraint& c : rod.segment_constraints())
+    if (spec.hold_orientation && c.segment == seg)
+      return "segment " + std::to_string(seg) + " of rod '" + spec.rod +
+             "' has a hinge (a boundary condition)";
+  const SegmentDrive* sd = rod.segment_drive(seg);
+  if (spec.hold_orientation && sd && sd->kind != SegmentDrive::Kind::kTarget)
+    return "segment " + std::to_string(seg) + " of rod '" + spec.rod + "' has a boundary condition";
+  for (const auto& kv : grasps_) {
+    const GraspState& g = kv.second;
+    if (!g.held || g.rod != ri || kv.first == spec.name) continue;
+    const int other = g.grasp.segment;
+    if (other == seg)
+      return "segment " + std::to_string(seg) + " of rod '" + spec.rod +
+             "' is already held by grasp '" + kv.first + "'; release it first";
+    if (std::abs(other - seg) == 1)
+      return "segment " + std::to_string(seg) + " of rod '" + spec.rod + "' shares node " +
+             std::to_string(std::max(seg, other)) + " with segment " + std::to_string(other) +
+             ", held by grasp '" + kv.first + "'; release it first or grasp further along";
+  }
+  *rod_index = ri;
+  *segment = seg;
+  return "";
+}
+
+std::string GraspSet::add(World& world, const GraspSpec& spec, const Eigen::Isometry3d& holder,
+                          const Eigen::Isometry3d* offset, double now) {
+  auto it = grasps_.find(spec.name);
+  if (it != grasps_.end() && it->second.held)
+    return "grasp '" + spec.name + "' already holds rod '" + it->second.grasp.rod +
+           "'; release it first";
+  int ri = -1, seg = -1;
+  const std::string error = check(world, spec, &ri, &seg);
+  if (!error.empty()) return error;
+  const bool had_wrench = it != grasps_.end() && it->second.rod != ri;
+  const int old_rod = it != grasps_.end() ? it->second.rod : -1;
+  GraspState& g = grasps_[spec.name];
+  g = GraspState();
+  g.spec = spec;
+  g.rod = ri;
+  g.held = true;
+  g.arc_length = midpoint_arc_length(world.rods()[ri], seg);
+  g.grasp.name = spec.name;
+  g.grasp.rod = spec.rod;
+  g.grasp.segment = seg;
+  g.grasp.hold_orientation = spec.hold_orientation;
+  attach(world, spec.name, holder, offset, now);
+  if (had_wrench) apply_wrenches(world, old_rod);
+  apply_wrenches(world, ri);
+  return "";
+}
+
+void GraspSet::attach(World& world, const std::string& name, const Eigen::Isometry3d& holder,
+                      const Eigen::Isometry3d* offset, double now) {
+  GraspState* g = find(name);
+  if (!g) return;
+  Rod& rod = world.rods()[g->rod];
+  const Eigen::Isometry3d segment = segment_pose(rod, g->grasp.segment);
+  if (offset) {
+    g->grasp.offset = *offset;
+    g->holder.reset(segment * offset->inverse());  // where the segment is now: nothing jumps
+    g->holder.set_goal(now, holder, 0.0);
+  } else {
+    g->grasp.offset = holder.inverse() * segment;
+    g->holder.reset(holder);
+  }
+  g->twist_angle = 0.0;
+  g->held = true;
+  hold(rod, g->grasp, g->holder_pose());
+  g->hold_pending = true;
+}
+
+bool GraspSet::release(World& world, const std::string& name) {
+  GraspState* g = find(name);
+  if (!g || !g->held) return false;
+  corde::release(world.rods()[g->rod], g->grasp);
+  g->held = false;
+  g->twist_rate = 0.0;
+  return true;
+}
+
+GraspState* GraspSet::find(const std::string& name) {
+  auto it = grasps_.find(name);
+  return it == grasps_.end() ? nullptr : &it->second;
+}
+
+const GraspState* GraspSet::find(const std::string& name) const {
+  auto it = grasps_.find(name);
+  return it == grasps_.end() ? nullptr : &it->second;
+}
+
+void GraspSet::set_goal(const std::string& name, double now, const Eigen::Isometry3d& pose,
+                        double duration) {
+  GraspState* g = find(name);
+  if (g && g->held) g->holder.set_goal(now, pose, duration);
+}
+
+void GraspSet::set_wrench(World& world, const std::string& name, const Vec3& force,
+                          const Vec3& torque) {
+  GraspState* g = find(name);
+  if (!g) return;
+  g->force = force;
+  g->torque = torque;
+  apply_wrenches(world, g->rod);
+}
+
+void GraspSet::set_twist_rate(const std::string& name, double rate) {
+  GraspState* g = find(name);
+  if (g && g->held) g->twist_rate = rate;
+}
+
+void GraspSet::stop_all() {
+  for (auto& kv : grasps_) kv.second.holder.stop();
+}
+
+void GraspSet::apply_wrenches(World& world, int rod_index) const {
+  // The grasps are the only source of external forces so far: rebuild the rod's from all of them
+  // (two grasps may share a node).
+  Rod& rod = world.rods()[rod_index];
+  rod.clear_external();
+  for (const auto& kv : grasps_) {
+    const GraspState& g = kv.second;
+    if (g.rod != rod_index || (g.force.isZero(0.0) && g.torque.isZero(0.0))) continue;
+    // At the segment's midpoint: half on each of its nodes.
+    rod.add_external_force(g.grasp.segment, 0.5 * g.force);
+    rod.add_external_force(g.grasp.segment + 1, 0.5 * g.force);
+    rod.add_external_torque(g.grasp.segment, g.torque);
+  }
+}
+
+void GraspSet::before_step(World& world, double t, double h) {
+  for (auto& kv : grasps_) {
+    GraspState& g = kv.second;
+    if (!g.held) continue;
+    Rod& rod = world.rods()[g.rod];
+    const int s = g.grasp.segment;
+    g.origin0 = g.holder_pose().translation();
+    for (int k = 0; k < 2; ++k) g.x0[k] = rod.positions()[s + k];
+    // A holder at rest with nothing turning leaves the drives as they are (their targets hold).
+    if (!g.holder.moving() && g.twist_rate == 0.0 && !g.hold_pending) continue;
+    const HolderClip c = g.holder.advance(t, h, limits);
+    g.clip.speed |= c.speed;
+    g.clip.acceleration |= c.acceleration;
+    if (g.twist_rate != 0.0)
+      g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
+    hold(rod, g.grasp, g.holder_pose());
+    g.hold_pending = false;
+  }
+}
+
+void GraspSet::after_step(const World& world, double h) {
+  (void)h;  // the drives' reactions are per step already
+  // The rod exerts on the holder the opposite of what the grasp's drives exerted on the held
+  // items over the step: their reactions (boundary.h), which every integrator records with one
+  // meaning, m dv/dt - f on each node and J dw/dt + w x J w - tau on the segment (the implicit
+  // methods: the residual of those equations at the step's end). The nodes' forces act about the
+  // holder's origin at the step's start.
+  for (auto& kv : grasps_) {
+    GraspState& g = kv.second;
+    if (!g.held) continue;
+    const Rod& rod = world.rods()[g.rod];
+    const int s = g.grasp.segment;
+    Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+    for (int k = 0; k < 2; ++k) {
+      const NodeDrive* d = rod.node_drive(s + k);
+      if (!d) continue;
+      force -= d->reaction;
+      torque -= (g.x0[k] - g.origin0).cross(d->reaction);
+    }
+    if (g.grasp.hold_orientation)
+      if (const SegmentDrive* d = rod.segment_drive(s)) torque -= d->reaction;
+    g.reaction_force_sum += force;
+    g.reaction_torque_sum += torque;
+    ++g.reaction_steps;
+  }
+}
+
+bool GraspSet::take_reaction(const std::string& name, Vec3* force, Vec3* torque) {
+  GraspState* g = find(name);
+  if (!g || g->reaction_steps == 0) return false;
+  const Eigen::Matrix3d rt = g->holder_pose().linear().transpose();
+  *force = rt * (g->reaction_force_sum / g->reaction_steps);
+  *torque = rt * (g->reaction_torque_sum / g->reaction_steps);
+  g->reaction_force_sum.setZero();
+  g->reaction_torque_sum.setZero();
+  g->reaction_steps = 0;
+  return true;
+}
+
+void GraspSet::remake_on(World& world, int rod_index) {
+  Rod& rod = world.rods()[rod_index];
+  for (auto& kv : grasps_) {
+    GraspState& g = kv.second;
+    if (g.rod != rod_index) continue;
+    g.spec.place = GraspSpec::Place::kArcLength;
+    g.spec.value = g.arc_length;
+    g.grasp.segment = grasp_segment(rod, g.spec);
+    if (g.held) {
+      // Keep the holder; record the new segment's offset from it, so nothing jumps.
+      const Eigen::Isometry3d holder = g.holder_pose();
+      g.grasp.offset = holder.inverse() * segment_pose(rod, g.grasp.segment);
+      g.holder.reset(holder);
+      g.twist_angle = 0.0;
+      hold(rod, g.grasp, holder);
+      g.hold_pending = true;
+    }
+  }
+  apply_wrenches(world, rod_index);
+}
+
+}  // namespace corde

@@ -1,0 +1,238 @@
+#include "corde_sim/scene/automatic_choices.h"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "corde_sim/stability/explicit_step_limit.h"
+
+namespace corde {
+namespace {
+
+// The tightest bound so far and what set it.
+struct Bound {
+  double h;
+  std::string why;
+  void take(double value, const std::string& reason) {
+    if (value > 0.0 && value < h) {
+      h = value;
+      why = reason;
+    }
+  }
+};
+
+std::string fmt(const char* f, double a, double b = 0.0) {
+  char buf[200];
+  std::snprintf(buf, sizeof buf, f, a, b);
+  return buf;
+}
+
+// Angle of a rotation (rad).
+double angle_of(const Quat& q) { return 2.0 * std::atan2(q.vec().norm(), std::abs(q.w())); }
+
+// A keyframed motion's bounds: its mean speeds between keyframes (the smooth profiles peak at
+// 1.5 of them) against the element length, its turning per step, and its intervals.
+void motion_bounds(const Motion& m, double element, const std::string& who, Bound* b) {
+  const auto& k = m.keyframes();
+  for (size_t i = 1; i < k.size(); ++i) {
+    const double dt = k[i].time - k[i - 1].time;
+    if (!(dt > 0.0)) continue;
+    b->take(dt / 10.0, who + ": a keyframe interval of " + fmt("%.3g s takes 10 steps", dt));
+    const double v = 1.5 * (k[i].displacement - k[i - 1].displacement).norm() / dt;
+    if (v > 0.0)
+      b->take(0.5 * element / v,
+              who + fmt(": moving at up to %.3g m/s, half an element (%.3g m) per step", v,
+                        0.5 * element));
+    const double w = 1.5 *
+                     (angle_of(k[i - 1].rotation.conjugate() * k[i].rotation) +
+                      std::abs(k[i].angle - k[i - 1].angle)) /
+                     dt;
+    if (w > 0.0) b->take(0.1 / w, who + fmt(": turning at up to %.3g rad/s, 0.1 rad per step", w));
+  }
+}
+
+}  // namespace
+
+ImplicitStepChoice implicit_time_step(const Scene& scene) {
+  const World& world = scene.world;
+  Bound b{kFrameStep, "the 2 ms frame"};
+  b.take(scene.duration / 50.0, fmt("duration / 50 (%.3g s)", scene.duration));
+  const double g = world.gravity.norm();
+  for (const Rod& rod : world.rods()) {
+    const Section& s = rod.section();
+    double length = 0.0, element = INFINITY;
+    for (double l : rod.rest_lengths()) {
+      length += l;
+      element = std::min(element, l);
+    }
+    bool clamped = rod.ghost_start().active || rod.ghost_end().active ||
+                   !rod.segment_drives().empty() || !rod.segment_constraints().empty();
+    bool held = clamped || !rod.node_drives().empty() || !rod.node_constraints().empty();
+    // Only a grasp that holds for the whole run: a late or released one leaves the rod free for
+    // a while, and a free rod's lowest mode is the higher one (the smaller step).
+    for (const GraspSpec& spec : scene.grasps)
+      if (spec.rod == rod.name() && spec.grasp_time <= 0.0 && std::isinf(spec.release_time)) {
+        held = true;
+        clamped = clamped || spec.hold_orientation;
+      }
+    const double beta = (clamped ? 1.875 : held ? 3.927 : 4.730) / length;
+    const double bending = beta * beta * std::sqrt(s.bend / s.mass_per_length);
+    const double pendulum = held ? std::sqrt(g / length) : 0.0;
+    const double omega = std::max(bending, pendulum);
+    const std::string who = "rod '" + rod.name() + "'";
+    const bool bdf2 = world.integrator == Integrator::kBdf2;
+    if (omega > 0.0)
+      b.take((bdf2 ? 0.2 : 0.0335) / omega,
+             who + fmt(": its lowest mode (%.3g rad/s", omega) +
+                 (bending >= pendulum ? ", bending" : ", pendulum") +
+                 (bdf2 ? ") keeps its period to 1.3% and loses 1.1% of its amplitude per period"
+                       : ") loses at most 10% of its amplitude per period"));
+    for (const NodeDrive& d : rod.node_drives()) {
+      const std::string node = who + " node " + std::to_string(d.node);
+      if (d.kind == NodeDrive::Kind::kVelocity && d.velocity.norm() > 0.0)
+        b.take(0.5 * element / d.velocity.norm(),
+               node + fmt(": moving at %.3g m/s, half an element (%.3g m) per step",
+                          d.velocity.norm(), 0.5 * element));
+      if (d.kind == NodeDrive::Kind::kMotion && d.motion)
+        motion_bounds(*d.motion, element, node, &b);
+    }
+    for (const SegmentDrive& d : rod.segment_drives()) {
+      const std::string seg = who + " segment " + std::to_string(d.segment);
+      if (d.kind == SegmentDrive::Kind::kSpin && d.rate != 0.0)
+        b.take(0.1 / std::abs(d.rate),
+               seg + fmt(": spinning at %.3g rad/s, 0.1 rad per step", std::abs(d.rate)));
+      if (d.kind == SegmentDrive::Kind::kMotion && d.motion)
+        motion_bounds(*d.motion, element, seg, &b);
+    }
+    for (const GhostFrame* gf : {&rod.ghost_start(), &rod.ghost_end()})
+      if (gf->active && gf->motion) motion_bounds(*gf->motion, element, who + " clamp", &b);
+    for (const Load& l : rod.loads())
+      if (l.ramp_time > 0.0)
+        b.take(l.ramp_time / 10.0,
+               who + fmt(": a load ramped over %.3g s takes 10 steps", l.ramp_time));
+    for (const GraspSpec& spec : scene.grasps)
+      if (spec.rod == rod.name() && spec.motion)
+        motion_bounds(*spec.motion, element, "grasp '" + spec.name + "'", &b);
+  }
+  return {b.h, b.why};
+}
+
+double explicit_time_step(const World& world, std::string* why) {
+  double limit = INFINITY;
+  for (const Rod& rod : world.rods()) {
+    const StabilityEstimate e = estimate_stability(rod);
+    // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
+    const double h = state_critical_time_step(rod);
+    if (std::isnan(h) || h < limit) {
+      limit = h;
+      *why = "the stability limit of rod '" + rod.name() + "' (" +
+             (h < e.time_step ? std::string("modes of its start shape") : e.limiting + " modes") +
+             ")";
+    }
+  }
+  return limit > 0.0 && std::isfinite(limit) ? 0.8 * limit : 0.0;
+}
+
+namespace {
+
+double thread_cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// CPU seconds per step of `integrator` at step h on a copy of the world: one step to warm up,
+// three to size the batches, then five batches of equal steps (3 to 2000 each) within `budget`
+// seconds in all, the fastest batch counted. Thread CPU time and the fastest batch keep other
+// processes and a preemption out of the figure; the clock is read only around batches (a read
+// costs about as much as a small rod's step). Throws what the step throws; NaN if the copy's
+// state turned non-finite.
+double seconds_per_step(const World& world, Integrator integrator, double h, double budget) {
+  World w = world;
+  w.integrator = integrator;
+  w.time_step = h;
+  w.step();
+  double start = thread_cpu_seconds();
+  w.step(3);
+  const double first = (thread_cpu_seconds() - start) / 3.0;
+  const int n = static_cast<int>(std::clamp(budget / 5.0 / std::max(first, 1e-9), 3.0, 2000.0));
+  double best = first;
+  for (int batch = 0; batch < 5; ++batch) {
+    start = thread_cpu_seconds();
+    w.step(n);
+    best = std::min(best, (thread_cpu_seconds() - start) / n);
+  }
+  return w.finite() ? best : NAN;
+}
+
+}  // namespace
+
+IntegratorChoice choose_integrator(const Scene& scene, double given_step, double trial_seconds) {
+  const World& world = scene.world;
+  IntegratorChoice c;
+  std::string limit_why;
+  const double explicit_h = explicit_time_step(world, &limit_why);
+  const char* explicit_name = integrator_name(kDefaultIntegrator);
+  if (given_step > 0.0) {
+    c.time_step = given_step;
+    if (explicit_h > 0.0 && given_step <= explicit_h / 0.8) {
+      c.integrator = kDefaultIntegrator;
+      c.reason = std::string("integrator: auto chose ") + explicit_name + ": the time_step " +
+                 fmt("%.3g s is within %.3g s, ", given_step, explicit_h / 0.8) + limit_why +
+                 ", and an explicit step costs less than an implicit one at the same step";
+    } else {
+      c.integrator = Integrator::kImplicitEuler;
+      c.reason = std::string("integrator: auto chose implicit_euler: the time_step ") +
+                 fmt("%.3g s exceeds %.3g s, ", given_step, explicit_h / 0.8) + limit_why +
+                 ", beyond which " + explicit_name + " is unstable";
+    }
+    return c;
+  }
+  const ImplicitStepChoice implicit = implicit_time_step(scene);
+  c.explicit_step = explicit_h;
+  c.implicit_step = implicit.time_step;
+  std::string implicit_problem;
+  try {
+    c.implicit_cost =
+        seconds_per_step(world, Integrator::kImplicitEuler, implicit.time_step, trial_seconds);
+    if (std::isnan(c.implicit_cost)) implicit_problem = "its trial steps turned non-finite";
+  } catch (const std::exception& e) {
+    implicit_problem = e.what();
+  }
+  if (explicit_h > 0.0) {
+    c.explicit_cost = seconds_per_step(world, kDefaultIntegrator, explicit_h, trial_seconds);
+  }
+  const double explicit_rate = explicit_h > 0.0 ? c.explicit_cost / explicit_h : INFINITY;
+  const double implicit_rate =
+      implicit_problem.empty() ? c.implicit_cost / implicit.time_step : INFINITY;
+  const std::string ex = std::string(explicit_name) + fmt(" at %.3g s steps (0.8 x ", explicit_h) +
+                         limit_why +
+                         fmt(") costs %.3g us per step, %.3g s of CPU per simulated s",
+                             c.explicit_cost * 1e6, explicit_rate);
+  const std::string im = implicit_problem.empty()
+                             ? fmt("implicit_euler at %.3g s steps (", implicit.time_step) +
+                                   implicit.why +
+                                   fmt(") costs %.3g us per step, %.3g s of CPU per simulated s",
+                                       c.implicit_cost * 1e6, implicit_rate)
+                             : "implicit_euler failed its trial (" + implicit_problem + ")";
+  if (!(explicit_rate <= implicit_rate) && implicit_problem.empty()) {
+    c.integrator = Integrator::kImplicitEuler;
+    c.time_step = implicit.time_step;
+    c.reason = "integrator: auto chose implicit_euler, " +
+               fmt("%.3g", explicit_rate / implicit_rate) + "x cheaper: " + im + "; " + ex;
+  } else {
+    c.integrator = kDefaultIntegrator;
+    c.time_step = explicit_h;
+    c.reason =
+        std::string("integrator: auto chose ") + explicit_name +
+        (implicit_problem.empty() ? fmt(", %.3g", implicit_rate / explicit_rate) + "x cheaper"
+                                  : std::string()) +
+        ": " + ex + "; " + im;
+  }
+  return c;
+}
+
+}  // namespace corde

@@ -1,0 +1,168 @@
+// Rod::step and World::step must not touch the heap (real-time use). The global operator new is
+// replaced here for the whole unit-test executable; it only counts while a CountAllocations
+// object of the calling thread is alive, so the other tests are unaffected. Eigen's fixed-size
+// types never allocate and the library uses no dynamic Eigen matrices in the step, so counting
+// operator new covers every allocation the step could make (std::vector, std::string, ...).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/rod/boundary.h"
+#include "corde_sim/rod/material.h"
+#include "corde_sim/rod/rod_shape.h"
+#include "corde_sim/world/world.h"
+
+namespace {
+
+// Constant-initialised thread locals: reading them from operator new needs no allocation.
+thread_local bool counting = false;
+thread_local long allocations = 0;
+
+void* counted_alloc(std::size_t size, std::size_t align) {
+  if (counting) ++allocations;
+  if (size == 0) size = 1;
+  void* p = align > alignof(std::max_align_t)
+                ? std::aligned_alloc(align, (size + align - 1) / align * align)
+                : std::malloc(size);
+  return p;
+}
+
+// Out of line so that GCC does not inline free() into callers of operator delete and then warn
+// (-Wmismatched-new-delete) about free() of memory from operator new.
+[[gnu::noinline]] void release(void* p) noexcept { std::free(p); }
+
+struct CountAllocations {
+  CountAllocations() {
+    allocations = 0;
+    counting = true;
+  }
+  ~CountAllocations() { counting = false; }
+  long count() const { return allocations; }
+};
+
+}  // namespace
+
+void* operator new(std::size_t size) {
+  if (void* p = counted_alloc(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  if (void* p = counted_alloc(size, 0)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t a) {
+  if (void* p = counted_alloc(size, static_cast<std::size_t>(a))) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size, std::align_val_t a) {
+  if (void* p = counted_alloc(size, static_cast<std::size_t>(a))) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, 0);
+}
+void* operator new[](std::size_t size, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, 0);
+}
+void* operator new(std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, static_cast<std::size_t>(a));
+}
+void* operator new[](std::size_t size, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return counted_alloc(size, static_cast<std::size_t>(a));
+}
+void operator delete(void* p) noexcept { release(p); }
+void operator delete[](void* p) noexcept { release(p); }
+void operator delete(void* p, std::size_t) noexcept { release(p); }
+void operator delete[](void* p, std::size_t) noexcept { release(p); }
+void operator delete(void* p, std::align_val_t) noexcept { release(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { release(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { release(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { release(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { release(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { release(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { release(p); }
+
+namespace corde {
+namespace {
+
+Rod make_rod(const std::string& name, int elements, const Vec3& start) {
+  RodSpec spec;
+  spec.name = name;
+  spec.elements = elements;
+  spec.shape.start = start;
+  spec.shape.length = 0.5;
+  spec.section = make_section(material_preset("paper_rope").material, 0.01);
+  return build_rod(spec);
+}
+
+TEST(NoAllocation, CounterSeesAllocations) {
+  // Guards the test below against a counter that never counts.
+  CountAllocations c;
+  std::vector<double> v(10);
+  auto* p = new int(3);
+  delete p;
+  EXPECT_GE(c.count(), 2);
+}
+
+TEST(NoAllocation, WorldStepAllocatesNothing) {
+  World world;
+  // Every branch of the step: ghost clamp, fixed, moving and target nodes, fixed, spinning and
+  // turning segments, force and torque loads in and after their ramps.
+  Rod& a = world.add_rod(make_rod("clamped", 20, Vec3::Zero()));
+  a.ghost_start().active = true;
+  a.ghost_start().frame = a.orientations()[0];
+  a.add_node_drive({NodeDrive::Kind::kFixed, 0, a.positions()[0]});
+  a.add_load({Load::Kind::kForce, 20, Vec3(0.0, 0.1, 0.0), 0.0, 0.05});
+  Rod& b = world.add_rod(make_rod("driven", 15, Vec3(0.0, 1.0, 0.0)));
+  b.add_node_drive({NodeDrive::Kind::kVelocity, 0, b.positions()[0], Vec3(0.1, 0.0, 0.0)});
+  b.add_segment_drive({SegmentDrive::Kind::kSpin, 0, b.orientations()[0], 2.0});
+  b.add_segment_drive({SegmentDrive::Kind::kFixed, 14, b.orientations()[14]});
+  b.ghost_end().active = true;
+  b.add_load({Load::Kind::kTorque, 7, Vec3(0.0, 0.0, 1e-4), 0.0, 0.0});
+  Rod& c = world.add_rod(make_rod("grasped", 10, Vec3(0.0, 2.0, 0.0)));
+  NodeDrive grasp{NodeDrive::Kind::kTarget, 5, c.positions()[5]};
+  grasp.target = c.positions()[5];
+  c.add_node_drive(grasp);
+  SegmentDrive turn{SegmentDrive::Kind::kTarget, 5, c.orientations()[5]};
+  turn.target = c.orientations()[5];
+  c.add_segment_drive(turn);
+  world.time_step = 2e-5;
+
+  long count = 0;
+  {
+    CountAllocations counter;
+    for (int k = 0; k < 1000; ++k) world.step();
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 1000 World::step";
+  EXPECT_TRUE(world.finite());
+  EXPECT_GT(world.time(), 0.0199);
+}
+
+// The implicit step reuses its buffers after the first step (operator new only: Eigen's dynamic
+// vectors allocate with malloc, which this counter does not see; they keep their sizes here).
+TEST(NoAllocation, ImplicitStepAllocatesNothingAfterTheFirst) {
+  Rod rod = make_rod("implicit", 20, Vec3::Zero());
+  rod.ghost_start().active = true;
+  rod.ghost_start().frame = rod.orientations()[0];
+  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  rod.add_load({Load::Kind::kForce, 20, Vec3(0.0, 0.1, 0.0), 0.0, 0.05});
+  ImplicitEuler integrator;
+  const Vec3 g(0.0, 0.0, -9.81);
+  integrator.step(rod, 0.0, 1e-3, g);
+  long count = 0;
+  {
+    CountAllocations counter;
+    for (int k = 1; k < 50; ++k) integrator.step(rod, k * 1e-3, 1e-3, g);
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 49 implicit steps";
+  EXPECT_TRUE(rod.finite());
+}
+
+}  // namespace
+}  // namespace corde
