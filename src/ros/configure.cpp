@@ -79,17 +79,12 @@ std::string integrator_names() {
 }
 
 double explicit_margin(const corde::World& world, std::string* limiting_rod) {
-  double margin = 0.0;
   limiting_rod->clear();
   if (corde::is_implicit(world.integrator)) return 0.0;
-  for (const corde::Rod& rod : world.rods()) {
-    const double m = world.time_step / corde::critical_time_step(rod);
-    if (!(m <= margin)) {  // NaN wins: it is reported, not hidden
-      margin = m;
-      *limiting_rod = rod.name();
-    }
-  }
-  return margin;
+  const corde::WorldStepLimit limit = corde::explicit_step_limit(world, false);
+  if (limit.rod < 0) return 0.0;
+  *limiting_rod = world.rods()[limit.rod].name();
+  return world.time_step / limit.time_step;  // NaN when the estimate is: reported, not hidden
 }
 
 SimSettings settings_from_world(const corde::World& world) {

@@ -121,18 +121,14 @@ ImplicitStepChoice implicit_time_step(const Scene& scene) {
 }
 
 double explicit_time_step(const World& world, std::string* why) {
-  double limit = INFINITY;
-  for (const Rod& rod : world.rods()) {
-    const StabilityEstimate e = estimate_stability(rod);
-    // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
-    const double h = state_critical_time_step(rod);
-    if (std::isnan(h) || h < limit) {
-      limit = h;
-      *why = "the stability limit of rod '" + rod.name() + "' (" +
-             (h < e.time_step ? std::string("modes of its start shape") : e.limiting + " modes") +
-             ")";
-    }
-  }
+  // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
+  const WorldStepLimit l = explicit_step_limit(world, true);
+  if (l.rod >= 0)
+    *why = "the stability limit of rod '" + world.rods()[l.rod].name() + "' (" +
+           (l.limiting == "start shape" ? std::string("modes of its start shape")
+                                        : l.limiting + " modes") +
+           ")";
+  const double limit = l.time_step;
   return limit > 0.0 && std::isfinite(limit) ? 0.8 * limit : 0.0;
 }
 

@@ -465,17 +465,9 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
 }
 
 void check_time_step(Scene* scene, const Value* given) {
-  double limit = INFINITY;
-  std::string which;
-  StabilityEstimate worst;
-  for (const Rod& rod : scene->world.rods()) {
-    const StabilityEstimate e = estimate_stability(rod);
-    if (which.empty() || std::isnan(e.time_step) || e.time_step < limit) {
-      limit = e.time_step;
-      which = rod.name();
-      worst = e;
-    }
-  }
+  const WorldStepLimit worst = explicit_step_limit(scene->world, false);
+  const double limit = worst.time_step;
+  const std::string which = worst.rod >= 0 ? scene->world.rods()[worst.rod].name() : "";
   if (!given) {
     // A degenerate rod (radius 1e-100) can give an infinite or zero limit: no step to run at.
     if (!(limit > 0.0 && std::isfinite(limit)))

@@ -296,8 +296,7 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
       // Halving cannot help when even the last allowed halving stays above the explicit limit,
       // linearised about the state the world went back to (a collapsed or crumpled rod's limit
       // can be far below its straight one's).
-      double limit = 1e300;
-      for (const Rod& rod : world.rods()) limit = std::min(limit, state_critical_time_step(rod));
+      const double limit = explicit_step_limit(world, true).time_step;
       if (user_h_ / std::ldexp(1.0, settings_.max_halvings) > limit) halve = false;
     }
     if (halve) {
