@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/rod/rod_edit.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/stability/explicit_step_limit.h"
@@ -69,14 +70,7 @@ const std::vector<std::string>& configure_flags() {
   return flags;
 }
 
-std::string integrator_names() {
-  std::string out;
-  for (corde::Integrator i :
-       {corde::Integrator::kSemiImplicitEuler, corde::Integrator::kSplitRotation,
-        corde::Integrator::kImplicitEuler, corde::Integrator::kBdf2})
-    out += (out.empty() ? "" : ", ") + std::string(corde::integrator_name(i));
-  return out;
-}
+std::string integrator_names() { return corde::integrator_names_joined(); }
 
 double explicit_margin(const corde::World& world, std::string* limiting_rod) {
   limiting_rod->clear();

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/io/file_read.h"
 #include "corde_sim/scene/automatic_choices.h"
 #include "corde_sim/stability/explicit_step_limit.h"
@@ -571,8 +572,9 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   scene.world.integrator = kDefaultIntegrator;
   bool integrator_auto = false;
   if (auto v = top.find("integrator")) {
-    const std::string name =
-        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "bdf2", "auto"});
+    std::vector<std::string> names = integrator_name_list();
+    names.push_back("auto");
+    const std::string name = v->choice(names);
     integrator_auto = name == "auto";
     if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
   }
