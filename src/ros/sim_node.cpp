@@ -55,8 +55,8 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "time");
 
   corde::GuardSettings guard_settings;
-  guard_settings.max_speed = params_.max_node_speed;
-  guard_settings.max_angular_speed = params_.max_angular_speed;
+  guard_settings.limits.max_speed = params_.max_node_speed;
+  guard_settings.limits.max_angular_speed = params_.max_angular_speed;
   guard_.set_settings(guard_settings);
   guard_.set_hooks(
       [this] {
