@@ -54,6 +54,10 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "node to publish /clock; stamps are that clock's time at start-up plus simulation "
         "time");
 
+  holder_limits_.max_speed = params_.holder_max_speed;
+  holder_limits_.max_acceleration = params_.holder_max_acceleration;
+  holder_limits_.max_angular_speed = params_.holder_max_angular_speed;
+  holder_limits_.max_angular_acceleration = params_.holder_max_angular_acceleration;
   corde::GuardSettings guard_settings;
   guard_settings.max_speed = params_.max_node_speed;
   guard_settings.max_angular_speed = params_.max_angular_speed;
@@ -65,7 +69,8 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
       },
       [this] {
         grasps_ = guard_grasps_;
-        grasp_commands_.rewind();  // the inputs since the snapshot are not lost
+        grasps_.limits = holder_limits_;  // configuration: never taken back by a rollback
+        grasp_commands_.rewind();         // the inputs since the snapshot are not lost
       });
   step_fn_ = [this](corde::World* w) { step_once(w); };
   corde::Scene scene;

@@ -120,10 +120,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);
-  grasps_.limits.max_speed = params_.holder_max_speed;
-  grasps_.limits.max_acceleration = params_.holder_max_acceleration;
-  grasps_.limits.max_angular_speed = params_.holder_max_angular_speed;
-  grasps_.limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  grasps_.limits = holder_limits_;
   for (const corde::GraspSpec& spec : initial_.grasps) {
     auto p = params_.grasps.find(spec.name);
     const GraspSource source = p == params_.grasps.end() ? GraspSource::kTopic : p->second.source;

@@ -198,6 +198,9 @@ class SimNode {
   corde::Scene initial_;  // the scene as loaded, for ~reset
   corde::World world_;
   corde::GraspSet grasps_;
+  // The holder limits as configured (parameters, dynamic_reconfigure): put into grasps_ at every
+  // scene install and after every rollback of the guard, whose snapshot of grasps_ may be older.
+  corde::HolderLimits holder_limits_;
   std::map<std::string, GraspWiring> wiring_;
   std::vector<std::pair<const std::string*, GraspWiring*>> scripted_;  // run_steps' list
   bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
