@@ -73,6 +73,15 @@ std::string check_step_cost(const corde::World& candidate, const corde::World& c
   return "";
 }
 
+// A copy of a world that another thread steps gets an obstacle set of its own (the obstacles
+// copied, their meshes shared): a step poses the keyframed obstacles in its set.
+void own_obstacles(corde::World* world) {
+  if (!world->obstacles) return;
+  auto set = std::make_shared<corde::ObstacleSet>();
+  for (int i = 0; i < world->obstacles->size(); ++i) set->add(world->obstacles->obstacle(i));
+  world->obstacles = set;
+}
+
 // What a service thread needs of the running simulation for its checks (copied in the loop).
 struct RunningCopy {
   corde::World world;
@@ -111,6 +120,7 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   RunningCopy now;
   if (!in_loop([&] {
         now.world = world_;
+        own_obstacles(&now.world);
         now.step_time_us = step_time_us_;
         now.stopped_note = stopped_note();
         now.scene_path = scene_path_;
@@ -224,7 +234,11 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
   if (!in_loop([&] {
         error = configured_copy(req, &world, &settings, &resample, &summary);
         if (!error.empty()) error += stopped_note();
-        if (error.empty()) now.world = world_;
+        if (error.empty()) {
+          own_obstacles(&world);
+          now.world = world_;
+          own_obstacles(&now.world);
+        }
         now.step_time_us = step_time_us_;
         now.stopped_note = stopped_note();
       })) {
