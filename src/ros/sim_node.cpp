@@ -96,14 +96,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   // tf input: own subscriptions so that this node's own (large) /tf messages are skipped
   // without being stored; everything else goes into the buffer.
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-  tf_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf", 100,
-      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
-          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, false); }));
-  tf_static_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf_static", 100,
-      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
-          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, true); }));
+  tf_input_ = std::make_unique<TfInput>(nh_, tf_buffer_.get());
 
   // A listener that connects while the simulation is paused would otherwise see no frames until
   // it resumes (frames are sent once per stamp): it alone gets the current ones.
@@ -119,15 +112,14 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   if (!error.empty()) throw std::invalid_argument("parameter ~scene: " + error);
 
   // Services on their own queue, served by their own threads (command_queue.h), started last.
-  ros::NodeHandle service_nh(pnh_);
-  service_nh.setCallbackQueue(&service_queue_);
-  services_.push_back(service_nh.advertiseService("reset", &SimNode::on_reset, this));
-  services_.push_back(service_nh.advertiseService("configure", &SimNode::on_configure, this));
-  services_.push_back(service_nh.advertiseService("pause", &SimNode::on_pause, this));
-  services_.push_back(service_nh.advertiseService("step", &SimNode::on_step, this));
-  services_.push_back(service_nh.advertiseService("grasp", &SimNode::on_grasp, this));
-  services_.push_back(service_nh.advertiseService("release", &SimNode::on_release, this));
-  services_.push_back(service_nh.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
+  services_ = std::make_unique<ServiceThreads>(pnh_);
+  services_->advertise("reset", &SimNode::on_reset, this);
+  services_->advertise("configure", &SimNode::on_configure, this);
+  services_->advertise("pause", &SimNode::on_pause, this);
+  services_->advertise("step", &SimNode::on_step, this);
+  services_->advertise("grasp", &SimNode::on_grasp, this);
+  services_->advertise("release", &SimNode::on_release, this);
+  services_->advertise("list_grasps", &SimNode::on_list_grasps, this);
   // A command queued from another thread wakes the loop at once (it waits on the global queue).
   commands_.set_wake([] {
     class Wake : public ros::CallbackInterface {
@@ -161,8 +153,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
   paused_ = params_.start_paused;
   // Two threads: a ~reset reading a long scene file does not hold a ~pause or ~list_grasps.
-  service_spinner_ = std::make_unique<ros::AsyncSpinner>(2, &service_queue_);
-  service_spinner_->start();
+  services_->start(2);
   ROS_INFO(
       "corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), integrator %s, time step %g s, "
       "%s%s",
@@ -173,7 +164,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
 
 SimNode::~SimNode() {
   close_commands();
-  if (service_spinner_) service_spinner_->stop();
+  if (services_) services_->stop();
   reconfigure_.reset();
 }
 

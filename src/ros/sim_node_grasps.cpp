@@ -420,20 +420,6 @@ std::string SimNode::check_workspace(const Eigen::Vector3d& p) const {
          "] m (~workspace_min, ~workspace_max)";
 }
 
-void SimNode::on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static) {
-  if (ev.getPublisherName() == ros::this_node::getName()) return;  // our own rods
-  const std::string authority = ev.getPublisherName();
-  for (const geometry_msgs::TransformStamped& t : ev.getMessage()->transforms) {
-    try {
-      tf_buffer_->setTransform(t, authority, is_static);
-    } catch (const std::exception& e) {
-      // (tf2's message quotes the frame ids, which may be of any length)
-      ROS_WARN_THROTTLE(5.0, "corde_sim: ignoring a transform from %s: %s", authority.c_str(),
-                        clip_reply(e.what()).c_str());
-    }
-  }
-}
-
 double SimNode::ros_to_sim_interval(double ros_seconds) const {
   // Input stamps are ROS time: simulation time itself when this node publishes /clock, wall
   // time otherwise, which the simulation follows at the real-time factor.

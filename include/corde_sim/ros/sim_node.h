@@ -49,6 +49,8 @@
 #include "corde_sim/ros/pacer.h"
 #include "corde_sim/ros/reconfigure_input.h"
 #include "corde_sim/ros/robot_obstacles.h"
+#include "corde_sim/ros/service_threads.h"
+#include "corde_sim/ros/tf_input.h"
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/stability/step_guard.h"
 
@@ -138,7 +140,6 @@ class SimNode {
   void check_holders_and_strain();
 
   // Inputs.
-  void on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static);
   void on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg);
   void on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg);
   void on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg);
@@ -271,12 +272,9 @@ class SimNode {
   double next_status_ = 0.0;
 
   ros::Publisher tf_pub_, marker_pub_, state_pub_, clock_pub_;
-  ros::Subscriber tf_sub_, tf_static_sub_;
-  std::vector<ros::ServiceServer> services_;
-  // Services run on their own queue and threads (command_queue.h); the spinner stops first.
-  ros::CallbackQueue service_queue_;
-  std::unique_ptr<ros::AsyncSpinner> service_spinner_;
+  std::unique_ptr<ServiceThreads> services_;  // stopped in ~SimNode, after close_commands()
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<TfInput> tf_input_;  // fills tf_buffer_
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   std::unique_ptr<ReconfigureInput> reconfigure_;  // its own thread; stopped in ~SimNode
   TfFrames tf_frames_;
