@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "corde_sim/linalg/block_tridiag_sparse.h"
+#include "corde_sim/math/so3.h"
 #include "corde_sim/model/rod_system.h"
 
 namespace corde {
@@ -17,13 +19,6 @@ namespace {
 constexpr int kColours = 5;
 constexpr int kReach = 2;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
-
-// The unit quaternion exp(theta/2): a rotation by |theta| about theta.
-Quat exp_half(const Vec3& theta) {
-  const double a = theta.norm();
-  if (a < 1e-300) return Quat::Identity();
-  return Quat(Eigen::AngleAxisd(a, theta / a));
-}
 
 // The unknowns of one rod and the energy, residual and Hessian as functions of them. The rod's
 // loads are taken out while it lives (its force computation then holds only internal forces and
@@ -190,7 +185,7 @@ class Problem {
         for (int k = 0; k < count_[p]; ++k) dx += d(start_[p] + k) * basis_[k];
         x[i] = x0_[i] + alpha * dx;
       } else {
-        rod_.orientations()[i] = (q0_[i] * exp_half(alpha * rotation(i, d))).normalized();
+        rod_.orientations()[i] = (q0_[i] * so3::exp_exact(alpha * rotation(i, d))).normalized();
       }
     }
     if (linear) return;
@@ -202,7 +197,7 @@ class Problem {
       const Vec3 t = e / len;
       const double dpar = t.dot(de);
       const Vec3 phi = t.cross(de - dpar * t) / len;
-      chords_[s] = ((len + dpar) / len) * (exp_half(phi) * e);
+      chords_[s] = ((len + dpar) / len) * (so3::exp_exact(phi) * e);
     }
     int a = -1;  // last anchor
     for (int i = 0; i < nn; ++i) {
@@ -568,7 +563,7 @@ Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double
   std::vector<int> reduced(a.size(), -1);
   for (int i = 0; i < n; ++i) reduced[pb.block_index(i)] = i;
   std::vector<Eigen::Triplet<double>> trip;
-  const Eigen::SparseMatrix<double> full = a.sparse();
+  const Eigen::SparseMatrix<double> full = to_sparse(a);
   for (int c = 0; c < full.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(full, c); it; ++it) {
       const int i = reduced[it.row()], j = reduced[it.col()];
