@@ -68,6 +68,7 @@
 #include "corde_sim/contact/obstacle.h"
 #include "corde_sim/grasp/grasp.h"
 #include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/linalg/block_tridiag_sparse.h"
 #include "corde_sim/model/rod_system.h"
 #include "corde_sim/rod/material.h"
 #include "corde_sim/rod/rod.h"
@@ -722,7 +723,7 @@ void BM_SparseLDLTFactorSolve(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   StepSystem s = make_step_system(n);
   step_matrix(s.rod, 2e-3, &s.a);
-  const Eigen::SparseMatrix<double> a = s.a.sparse();
+  const Eigen::SparseMatrix<double> a = corde::to_sparse(s.a);
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
   ldlt.analyzePattern(a);
   Eigen::VectorXd b = Eigen::VectorXd::Ones(s.a.size()), x;

@@ -6,14 +6,9 @@
 // torques.
 #pragma once
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
+#include "corde_sim/math/types.h"
 
 namespace corde {
-
-using Vec3 = Eigen::Vector3d;
-using Vec4 = Eigen::Vector4d;
-using Quat = Eigen::Quaterniond;
 
 // Product of a quaternion with the pure quaternion (v, 0): q (x) (0, v) without a general product.
 inline Quat mul_pure(const Quat& q, const Vec3& v) {

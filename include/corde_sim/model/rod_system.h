@@ -17,52 +17,13 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <Eigen/SparseCore>
 #include <vector>
 
+#include "corde_sim/linalg/block_tridiag.h"
+#include "corde_sim/math/types.h"
 #include "corde_sim/rod/rod.h"
 
 namespace corde {
-
-using Mat3 = Eigen::Matrix3d;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-
-// Symmetric block-tridiagonal matrix of n blocks of 6: diag[k] = block (k, k) (both triangles
-// stored), lower[k] = block (k + 1, k).
-struct BlockTridiag {
-  std::vector<Mat6> diag, lower;
-
-  void resize(int blocks);
-  void set_zero();
-  int blocks() const { return static_cast<int>(diag.size()); }
-  int size() const { return 6 * blocks(); }
-  // Adds the 3x3 block m at (row unknown r, column unknown c), both multiples of 3 with
-  // |r/6 - c/6| <= 1, and its transpose at (c, r) unless r == c.
-  void add(int r, int c, const Mat3& m);
-  // Fixes unknown i (a kinematic item or an unused slot): its row and column become e_i.
-  void fix(int i);
-  // y = A x (sizes size()).
-  void multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const;
-  Eigen::MatrixXd dense() const;  // for tests and small problems
-  Eigen::SparseMatrix<double> sparse() const;
-};
-
-// O(n) block Cholesky of a symmetric positive definite BlockTridiag: A = L L^T with L block lower
-// bidiagonal. Fixed-size 6x6 arithmetic; allocates only when the number of blocks grows.
-class BlockTridiagSolver {
- public:
-  // False when A is not positive definite: a pivot block fails Cholesky, or one of its pivots
-  // (the squared diagonal of the factor, as LDL^T's D) is <= min_pivot.
-  bool factor(const BlockTridiag& a, double min_pivot = 0.0);
-  // Solves A x = b in place.
-  void solve(Eigen::VectorXd* b) const;
-
- private:
-  std::vector<Mat6> l_inv_t_;  // L_kk^-T, the transposed inverse of each pivot block's factor
-  std::vector<Mat6> l_lower_;  // L(k + 1, k)
-  int blocks_ = 0;
-};
 
 // Energy terms, to select some of them (tests check each term's blocks on its own).
 enum SystemTerm : unsigned {

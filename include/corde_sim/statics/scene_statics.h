@@ -21,6 +21,9 @@ struct RodEquilibrium {
   // a column beyond buckling), a dynamic run leaves it. Zero: neutral directions (a rod free to
   // turn about a pin). -1: the factorisation could not tell.
   int negative_modes = 0, zero_modes = 0;
+  // False when dead torques act: they have no potential, so the Hessian's signs do not tell
+  // stability (a rod bent far by an end moment shows negative ones at rest); not judged then.
+  bool potential = true;
   // The lowest node, and the sag: how far it hangs below the lowest held node (m, >= 0 when it
   // hangs; NaN for a rod held by no node).
   int lowest_node = 0;

@@ -7,6 +7,7 @@
 
 #include "corde_sim/contact/segment_distance.h"
 #include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/math/so3.h"
 #include "corde_sim/world/world.h"
 
 namespace corde {
@@ -62,12 +63,6 @@ Vec3 tangential(const Vec3& v, const Vec3& n) { return v - n * n.dot(v); }
 // resistance's couples).
 bool tracks_spin(const ContactSettings& cs) {
   return cs.surface_friction || cs.rolling_friction > 0.0;
-}
-
-Mat3 cross_matrix(const Vec3& v) {
-  Mat3 m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
 }
 
 // The world inverse inertia of segment s as a contact's torque sees it: none for a kinematic
@@ -509,7 +504,7 @@ void ContactSystem::prepare_levers(const World& world, size_t k) {
   add_side(c.rod_a, c.seg_a, c.s_a, c.lever_a);
   if (c.rod_b >= 0) add_side(c.rod_b, c.seg_b, c.s_b, c.lever_b);
   cl.count = static_cast<int>(levers_.size()) - cl.first;
-  const Mat3 nx = cross_matrix(c.normal);
+  const Mat3 nx = so3::skew(c.normal);
   Mat3 k3 = scratch_w_[k] * Mat3::Identity();
   for (int i = cl.first; i < cl.first + cl.count; ++i) {
     const Lever& l = levers_[i];

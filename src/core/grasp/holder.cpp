@@ -3,31 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "corde_sim/math/so3.h"
+
 namespace corde {
 namespace {
 
 using Eigen::Quaterniond;
 using Eigen::Vector3d;
-
-// Rotation vector of a unit quaternion (the shorter way round).
-Vector3d rotation_vector(const Quaterniond& q) {
-  double w = q.w();
-  Vector3d v = q.vec();
-  if (w < 0.0) {
-    w = -w;
-    v = -v;
-  }
-  const double s = v.norm();
-  if (s < 1e-300) return 2.0 * v;
-  return (2.0 * std::atan2(s, w) / s) * v;
-}
-
-Quaterniond exp_map(const Vector3d& v) {
-  const double a = v.norm();
-  if (a < 1e-300) return Quaterniond::Identity();
-  const double s = std::sin(0.5 * a) / a;
-  return Quaterniond(std::cos(0.5 * a), s * v.x(), s * v.y(), s * v.z());
-}
 
 // One step of a tracker with a speed and an acceleration limit: e is the error to the reference
 // at the start of the step, v_ref the reference's velocity over the step. Far from the reference
@@ -123,15 +105,16 @@ HolderClip HolderMotion::advance(double t, double h, const HolderLimits& limits)
   cached_p_ = p1;
   cached_q_ = q1;
   const Vector3d v_ref = (p1 - p0) / h;
-  const Vector3d w_ref = rotation_vector(q1 * q0.conjugate()) / h;
+  const Vector3d w_ref = so3::log_exact(q1 * q0.conjugate()) / h;
   v_ = track(p0 - pose_.translation(), v_ref, v_, h, limits.max_speed, limits.max_acceleration,
              &clip);
-  w_ = track(rotation_vector(q0 * q_.conjugate()), w_ref, w_, h, limits.max_angular_speed,
+  w_ = track(so3::log_exact(q0 * q_.conjugate()), w_ref, w_, h, limits.max_angular_speed,
              limits.max_angular_acceleration, &clip);
   pose_.translation() += h * v_;
-  q_ = (exp_map(h * w_) * q_).normalized();  // world-frame increment; no drift off unit length
+  q_ = (so3::exp_exact(h * w_) * q_)
+           .normalized();  // world-frame increment; no drift off unit length
   const double lag = (p1 - pose_.translation()).norm();
-  const double angular_lag = rotation_vector(q1 * q_.conjugate()).norm();
+  const double angular_lag = so3::log_exact(q1 * q_.conjugate()).norm();
   // Inputs at tens of hertz give a reference whose velocity jumps at every input, which the
   // acceleration limit rounds off by a fraction of a millimetre: only a clip that leaves the
   // holder visibly behind its reference is reported.

@@ -1,73 +1,15 @@
 #include "corde_sim/integrators/implicit_step.h"
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "corde_sim/linalg/newton.h"
+#include "corde_sim/math/so3.h"
+
 namespace corde {
 
 namespace {
-
-// Small rotations (most steps turn a segment by well under 0.2 rad) by their Taylor series,
-// which are exact to round-off there and several times cheaper than the library's sin, cos and
-// atan2 that run for every segment in every Newton iteration.
-Quat exp_body(const Vec3& theta) {
-  const double a2 = theta.squaredNorm();
-  if (a2 < 0.04) {  // |theta| < 0.2: cos(x) and sin(x)/x of the half angle x, to x^8
-    const double x2 = 0.25 * a2;
-    const double c = 1.0 + x2 * (-1.0 / 2 + x2 * (1.0 / 24 + x2 * (-1.0 / 720 + x2 / 40320)));
-    const double sx = 1.0 + x2 * (-1.0 / 6 + x2 * (1.0 / 120 + x2 * (-1.0 / 5040 + x2 / 362880)));
-    const Vec3 v = (0.5 * sx) * theta;
-    return Quat(c, v.x(), v.y(), v.z());
-  }
-  const double a = std::sqrt(a2);
-  return Quat(Eigen::AngleAxisd(a, theta / a));
-}
-
-// Rotation vector of the unit quaternion r (the shorter way round).
-Vec3 log_body(const Quat& r) {
-  const double s = r.w() < 0.0 ? -1.0 : 1.0;
-  const Vec3 v = s * r.vec();
-  const double n2 = v.squaredNorm(), w = s * r.w();
-  if (n2 < 0.01 * w * w) {  // t = n / w < 0.1: 2 atan(t) / n = (2 / w) atan(t) / t, to t^12
-    const double t2 = n2 / (w * w);
-    const double f =
-        1.0 + t2 * (-1.0 / 3 +
-                    t2 * (1.0 / 5 + t2 * (-1.0 / 7 + t2 * (1.0 / 9 + t2 * (-1.0 / 11 + t2 / 13)))));
-    return (2.0 * f / w) * v;
-  }
-  const double n = std::sqrt(n2);
-  if (n < 1e-300) return Vec3::Zero();
-  return (2.0 * std::atan2(n, w) / n) * v;
-}
-
-// (1/a^2 - (1 + cos a) / (2 a sin a)) for a = |theta|; below 0.3 its series (to a^8), which also
-// avoids the formula's cancellation at small a.
-double inv_jacobian_coefficient(const Vec3& theta) {
-  const double a2 = theta.squaredNorm();
-  if (a2 < 0.09)
-    return 1.0 / 12 + a2 * (1.0 / 720 + a2 * (1.0 / 30240 + a2 * (1.0 / 1209600 + a2 / 47900160)));
-  const double a = std::sqrt(a2);
-  return 1.0 / a2 - (1.0 + std::cos(a)) / (2.0 * a * std::sin(a));
-}
-
-// J_r^-1(theta)^T y: the gradient of f(log(exp(theta) exp(delta))) at delta = 0 when y = df/dtheta.
-Vec3 inv_right_jacobian_t(const Vec3& theta, const Vec3& y) {
-  const double c = inv_jacobian_coefficient(theta);
-  return y - 0.5 * theta.cross(y) + c * theta.cross(theta.cross(y));
-}
-
-// J_r(theta), the right Jacobian of exp: exp(theta + d) = exp(theta) exp(J_r(theta) d) to first
-// order in d.
-Mat3 right_jacobian(const Vec3& theta) {
-  const double a = theta.norm();
-  const double c1 = a < 1e-4 ? 0.5 - a * a / 24.0 : (1.0 - std::cos(a)) / (a * a);
-  const double c2 = a < 1e-4 ? 1.0 / 6.0 - a * a / 120.0 : (a - std::sin(a)) / (a * a * a);
-  Mat3 k;
-  k << 0.0, -theta.z(), theta.y(), theta.z(), 0.0, -theta.x(), -theta.y(), theta.x(), 0.0;
-  return Mat3::Identity() - c1 * k + c2 * k * k;
-}
 
 // Restricts unknown u (3 components at 3u) of a to the directions of the projector p: rows and
 // columns multiplied by p, the complement (I - p) on the diagonal, so that the solution's
@@ -110,7 +52,7 @@ void ImplicitEuler::setup_supports(Rod& rod, double t1) {
     kind_[2 * c.segment + 1] = 2;
     proj_[2 * c.segment + 1] = b * b.transpose();
     const Vec3 th = b * b.dot(what_[c.segment]);
-    q[c.segment] = (q0_[c.segment] * exp_body(th)).normalized();
+    q[c.segment] = (q0_[c.segment] * so3::exp(th)).normalized();
   }
   for (const NodeDrive& d : rod.node_drives()) {
     x[d.node] = d.kind == NodeDrive::Kind::kTarget ? d.target : drive_position(d, t1);
@@ -233,7 +175,7 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
   const int nn = rod.num_nodes(), ns = rod.num_segments();
   const auto& x = rod.positions();
   const auto& q = rod.orientations();
-  for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
+  for (int s = 0; s < ns; ++s) theta_[s] = so3::log(q0_[s].conjugate() * q[s]);
   sys.gradient(g);
   const double inv_h2 = 1.0 / (h * h), inv_h = 1.0 / h;
   for (int i = 0; i < nn; ++i)
@@ -269,7 +211,7 @@ void ImplicitEuler::gradient(const Rod& rod, const RodSystem& sys, double h, Eig
   }
   for (const auto& [s, tq] : torques_) gth_[s] -= rot0_[s].transpose() * tq;
   for (int s = 0; s < ns; ++s)
-    g->segment<3>(RodSystem::segment_index(s)) += inv_right_jacobian_t(theta_[s], gth_[s]);
+    g->segment<3>(RodSystem::segment_index(s)) += so3::inv_right_jacobian_t(theta_[s], gth_[s]);
 }
 
 void ImplicitEuler::project_gradient(Eigen::VectorXd* g) const {
@@ -404,7 +346,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
     xhat_[i] = xt_[i] + beta_ * vt;
   }
   for (int s = 0; s < ns; ++s) {
-    off_[s] = second ? Vec3(log_body(q0_[s].conjugate() * qp_[s]) / 3.0) : Vec3::Zero();
+    off_[s] = second ? Vec3(so3::log(q0_[s].conjugate() * qp_[s]) / 3.0) : Vec3::Zero();
     const Vec3 wt = second ? Vec3((4.0 * w[s] - wp_[s]) / 3.0) : w[s];
     what_[s] = beta_ * wt - off_[s];
   }
@@ -416,7 +358,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
       xx_[i] = 2.0 * x[i] - xp_[i];
       vx_[i] = 2.0 * v[i] - vp_[i];
     }
-    for (int s = 0; s < ns; ++s) qx_[s] = (q0_[s] * exp_body(-3.0 * off_[s])).normalized();
+    for (int s = 0; s < ns; ++s) qx_[s] = (q0_[s] * so3::exp(-3.0 * off_[s])).normalized();
   }
   factored_ = false;
   const double hs = h;  // the world's step (drives, loads and the new time use it)
@@ -425,7 +367,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   // Predictor: free items move on with their velocities; supports are set or projected.
   const double t1 = t + hs;
   for (int i = 0; i < nn; ++i) x[i] = xhat_[i];
-  for (int s = 0; s < ns; ++s) q[s] = (q0_[s] * exp_body(what_[s])).normalized();
+  for (int s = 0; s < ns; ++s) q[s] = (q0_[s] * so3::exp(what_[s])).normalized();
   setup_supports(rod, t1);
   for (GhostFrame* gf : {&rod.ghost_start(), &rod.ghost_end()})
     if (gf->active && gf->motion) gf->frame = ghost_frame_at(*gf, t1);
@@ -436,7 +378,7 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   // O(h^2) (with R^n they would act in the middle of the step, an O(h) error).
   rot0_.resize(ns);
   for (int s = 0; s < ns; ++s)
-    rot0_[s] = second ? Mat3(qx_[s].toRotationMatrix() * right_jacobian(-3.0 * off_[s]))
+    rot0_[s] = second ? Mat3(qx_[s].toRotationMatrix() * so3::right_jacobian(-3.0 * off_[s]))
                       : Mat3(q0_[s].toRotationMatrix());
   setup_dissipation(rod, h);
   setup_loads(rod, t1);
@@ -480,143 +422,161 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   // Loads whose size overflows (a force of 1e200 N: |F|^2 is infinite) would make the tolerance
   // infinite and the step "converge" without moving: no step can meet them.
   const bool finite_loads = std::isfinite(ref);
-  auto norm_scaled = [&](const Eigen::VectorXd& g) {
-    double r2 = 0.0;
-    for (int k = 0; k < nn; ++k) {
-      r2 += g.segment<3>(6 * k).squaredNorm();
-      r2 += (g.segment<3>(6 * k + 3) / lc).squaredNorm();
+  // Newton iterations on the shared solver (linalg/newton.h), with this step's matrices, chord
+  // iterations and line search settings (its arithmetic as the step always had it).
+  class Iterations final : public NewtonProblem {
+   public:
+    Iterations(ImplicitEuler* e, Rod* rod, RodSystem* sys, double h, double lc, double tolerance,
+               ImplicitResult* res)
+        : e_(*e),
+          rod_(*rod),
+          sys_(*sys),
+          x_(rod->positions()),
+          q_(rod->orientations()),
+          h_(h),
+          lc_(lc),
+          tolerance_(tolerance),
+          res_(*res) {}
+
+    // |[f; tau / lc]|, the residual's scaled norm.
+    double norm_scaled(const Eigen::VectorXd& g) const {
+      double r2 = 0.0;
+      for (int k = 0; k < rod_.num_nodes(); ++k) {
+        r2 += g.segment<3>(6 * k).squaredNorm();
+        r2 += (g.segment<3>(6 * k + 3) / lc_).squaredNorm();
+      }
+      return std::sqrt(r2);
     }
-    return std::sqrt(r2);
-  };
-  // The gradient, kept also before the supports' projection (the reactions at the end).
-  auto full_gradient = [&](Eigen::VectorXd* g, Eigen::VectorXd* raw) {
-    gradient(rod, sys, h, g);
-    *raw = *g;
-    project_gradient(g);
-  };
-  full_gradient(&g_, &g_raw_);
-  // Phi and the magnitude of the terms it sums (for telling its changes from round-off), once an
-  // iteration needs them.
-  double phi = 0.0, phi_scale = 0.0;
-  bool have_phi = false;
-  double last_residual = 0.0;
-  bool last_kept = false;  // the last iteration ran on a kept factorisation
-  for (int it = 0; it < opt_.max_iterations && finite_loads; ++it) {
-    res.residual = norm_scaled(g_);
-    if (res.residual <= tolerance) {
-      res.converged = true;
-      break;
+    // The gradient, kept also before the supports' projection (the reactions at the end).
+    void full_gradient(Eigen::VectorXd* g, Eigen::VectorXd* raw) {
+      e_.gradient(rod_, sys_, h_, g);
+      theta_stale_ = false;
+      *raw = *g;
+      e_.project_gradient(g);
     }
-    // A kept factorisation that did not cut the residual to a quarter is no longer worth
-    // keeping, and Newton iterations factorise afresh until a step converges in one or none (the
-    // rod moves too much for chord iterations; the contact response may still keep one).
-    if (last_kept && res.residual > 0.25 * last_residual) {
-      factored_ = have_factor_ = false;
-      chord_ok_ = false;
+    void set_theta() {
+      for (size_t s = 0; s < q_.size(); ++s) e_.theta_[s] = so3::log(e_.q0_[s].conjugate() * q_[s]);
+      theta_stale_ = false;
     }
-    last_residual = res.residual;
-    const bool kept = chord_ok_ && factor_reusable(rod);
-    ++res.iterations;
-    // The exact Hessian converges quadratically; where it is not positive definite (frames sheared
-    // against their chords, a compressed chord) the definite variant stands in for this iteration.
-    if (!kept) {
-      sys.definite = false;
-      if (!refactor(rod, sys, h)) {
-        sys.definite = true;
-        if (!refactor(rod, sys, h)) {  // cannot fail with the definite variant
-          factored_ = false;
-          break;
+
+    double residual_norm() override { return norm_scaled(e_.g_); }
+    Check check(double residual) override {
+      res_.residual = residual;
+      if (residual <= tolerance_) {
+        res_.converged = true;
+        return Check::kConverged;
+      }
+      // A kept factorisation that did not cut the residual to a quarter is no longer worth
+      // keeping, and Newton iterations factorise afresh until a step converges in one or none
+      // (the rod moves too much for chord iterations; the contact response may still keep one).
+      if (last_kept_ && residual > 0.25 * last_residual_) {
+        e_.factored_ = e_.have_factor_ = false;
+        e_.chord_ok_ = false;
+      }
+      last_residual_ = residual;
+      return Check::kContinue;
+    }
+    bool direction(int attempt, double* slope) override {
+      (void)attempt;
+      kept_ = e_.chord_ok_ && e_.factor_reusable(rod_);
+      ++res_.iterations;
+      // The exact Hessian converges quadratically; where it is not positive definite (frames
+      // sheared against their chords, a compressed chord) the definite variant stands in for
+      // this iteration.
+      if (!kept_) {
+        sys_.definite = false;
+        if (!e_.refactor(rod_, sys_, h_)) {
+          sys_.definite = true;
+          if (!e_.refactor(rod_, sys_, h_)) {  // cannot fail with the definite variant
+            e_.factored_ = false;
+            return false;
+          }
         }
       }
+      e_.factored_ = true;
+      last_kept_ = kept_;
+      e_.d_ = -e_.g_;
+      e_.solver_.solve(&e_.d_);
+      if (kept_) e_.project_gradient(&e_.d_);  // the supports' directions may have turned since
+      *slope = e_.g_.dot(e_.d_);
+      e_.xs_ = x_;
+      e_.qk_ = q_;
+      return true;
     }
-    factored_ = true;
-    last_kept = kept;
-    d_ = -g_;
-    solver_.solve(&d_);
-    if (kept) project_gradient(&d_);  // the supports' directions may have turned since
-    // Backtracking line search (Armijo) on Phi along the retraction. A full step that cuts the
-    // residual to a quarter is taken without Phi (the common case, and Newton's near the
-    // solution): Phi, an energy evaluation at both ends, is needed only where the step may
-    // overshoot.
-    const double slope = g_.dot(d_);
-    xs_ = x;
-    qk_ = q;
-    auto set_theta = [&] {
-      for (int s = 0; s < ns; ++s) theta_[s] = log_body(q0_[s].conjugate() * q[s]);
-    };
-    double alpha = 1.0, phi_new = phi;
-    bool accepted = false, full_step = false;
-    for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
-      for (int i = 0; i < nn; ++i) x[i] = xs_[i] + alpha * d_.segment<3>(6 * i);
-      for (int s = 0; s < ns; ++s)
-        q[s] = (qk_[s] * exp_body(alpha * d_.segment<3>(6 * s + 3))).normalized();
-      const bool first = ls == 0;  // g_trial_ holds the gradient at this trial
-      if (!first) {
-        set_theta();
-      } else {
-        full_gradient(&g_trial_, &g_raw_trial_);  // sets theta_
-        if (norm_scaled(g_trial_) <= 0.25 * res.residual) {
-          g_.swap(g_trial_);
-          g_raw_.swap(g_raw_trial_);
-          accepted = full_step = true;
-          break;
-        }
-        if (!have_phi) {  // Phi at the iterate, evaluated only now
-          x.swap(xs_);
-          q.swap(qk_);
-          set_theta();
-          phi = merit(rod, sys, h);
-          phi_scale = std::abs(phi) + std::abs(sys.energy()) + 1e-300;
-          have_phi = true;
-          x.swap(xs_);
-          q.swap(qk_);
-          set_theta();
-        }
-      }
-      phi_new = merit(rod, sys, h);
-      if (!std::isfinite(phi_new)) continue;
-      if (phi_new <= phi + 1e-4 * alpha * slope) {
-        accepted = true;
-        if (first) {
-          g_.swap(g_trial_);
-          g_raw_.swap(g_raw_trial_);
-        } else {
-          full_gradient(&g_, &g_raw_);
-        }
-        break;
-      }
-      // Near the solution the change of Phi is lost in its round-off: accept a step that lowers
-      // the residual instead.
-      if (std::abs(phi_new - phi) <= 1e3 * std::numeric_limits<double>::epsilon() * phi_scale) {
-        if (!first) full_gradient(&g_trial_, &g_raw_trial_);
-        if (norm_scaled(g_trial_) < res.residual) {
-          g_.swap(g_trial_);
-          g_raw_.swap(g_raw_trial_);
-          accepted = true;
-          break;
-        }
-      }
-    }
-    if (!accepted) {
-      x = xs_;
-      q = qk_;
+    Retry rejected(int attempt) override {
+      (void)attempt;
+      x_ = e_.xs_;
+      q_ = e_.qk_;
       set_theta();
-      if (kept) {  // a stale direction: try again with the matrix at this iterate
-        factored_ = have_factor_ = false;
-        last_kept = false;
-        chord_ok_ = false;
-        continue;
+      if (kept_) {  // a stale direction: try again with the matrix at this iterate
+        e_.factored_ = e_.have_factor_ = false;
+        last_kept_ = false;
+        e_.chord_ok_ = false;
+        return Retry::kNextIteration;
       }
-      full_gradient(&g_, &g_raw_);
-      break;
+      full_gradient(&e_.g_, &e_.g_raw_);
+      return Retry::kStop;
     }
-    if (full_step)
-      have_phi = false;  // not evaluated at the new iterate
-    else
-      phi = phi_new;
-  }
+
+    // Along the retraction: positions added, rotations composed in the body frame.
+    void move(double alpha) override {
+      for (size_t i = 0; i < x_.size(); ++i) x_[i] = e_.xs_[i] + alpha * e_.d_.segment<3>(6 * i);
+      for (size_t s = 0; s < q_.size(); ++s)
+        q_[s] = (e_.qk_[s] * so3::exp(alpha * e_.d_.segment<3>(6 * s + 3))).normalized();
+      theta_stale_ = true;
+    }
+    double merit(double alpha) override {
+      (void)alpha;
+      if (theta_stale_) set_theta();
+      return e_.merit(rod_, sys_, h_);
+    }
+    // Phi at the iterate and the magnitude of the terms it sums (for telling its changes from
+    // round-off), evaluated only once a step needs them.
+    void base_merit(MeritAtIterate* m) override {
+      x_.swap(e_.xs_);
+      q_.swap(e_.qk_);
+      set_theta();
+      m->phi = e_.merit(rod_, sys_, h_);
+      const double scale = std::abs(m->phi) + std::abs(sys_.energy()) + 1e-300;
+      m->noise = 1e3 * std::numeric_limits<double>::epsilon() * scale;
+      x_.swap(e_.xs_);
+      q_.swap(e_.qk_);
+      set_theta();
+    }
+    double trial_residual() override {
+      full_gradient(&e_.g_trial_, &e_.g_raw_trial_);
+      return norm_scaled(e_.g_trial_);
+    }
+    void accept_trial() override {
+      e_.g_.swap(e_.g_trial_);
+      e_.g_raw_.swap(e_.g_raw_trial_);
+    }
+
+   private:
+    ImplicitEuler& e_;
+    Rod& rod_;
+    RodSystem& sys_;
+    std::vector<Vec3>& x_;
+    std::vector<Quat>& q_;
+    double h_, lc_, tolerance_;
+    ImplicitResult& res_;
+    double last_residual_ = 0.0;
+    bool last_kept_ = false;  // the last iteration ran on a kept factorisation
+    bool kept_ = false;
+    bool theta_stale_ = false;
+  };
+  Iterations iterations(this, &rod, &sys, h, lc, tolerance, &res);
+  iterations.full_gradient(&g_, &g_raw_);
+  // A full step that cuts the residual to a quarter is taken without Phi (the common case, and
+  // Newton's near the solution): Phi, an energy evaluation at both ends, is needed only where the
+  // step may overshoot.
+  NewtonOptions newton;
+  newton.max_iterations = opt_.max_iterations;
+  newton.line_search.max_trials = 30;
+  newton.line_search.full_step_cut = 0.25;
+  if (finite_loads) newton_solve(&iterations, newton);
   if (!res.converged) {
-    res.residual = norm_scaled(g_);
+    res.residual = iterations.norm_scaled(g_);
     res.converged = res.residual <= tolerance;
   }
   // Forces whose round-off exceeds a thousandth of the loads cannot resolve the motion (a
@@ -761,7 +721,8 @@ void ImplicitEuler::solve_impulses(const std::vector<Vec3>& impulses,
     Vec3 t = torque_impulses ? (*torque_impulses)[s] : Vec3::Zero();
     if (totals && !predicted_torques_.empty()) t -= predicted_torques_[s];
     if (!t.isZero())
-      z_.segment<3>(6 * s + 3) += inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * t) / h;
+      z_.segment<3>(6 * s + 3) +=
+          so3::inv_right_jacobian_t(theta_[s], rot0_[s].transpose() * t) / h;
   }
   project_gradient(&z_);
   rhs_ = z_;
@@ -823,8 +784,8 @@ void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses,
     }
     for (int s = 0; s < ns; ++s) {
       if (kind_[2 * s + 1] == 1) continue;
-      q[s] = (q[s] * exp_body(z_.segment<3>(6 * s + 3))).normalized();
-      w[s] = (log_body(q0_[s].conjugate() * q[s]) + off_[s]) / h;
+      q[s] = (q[s] * so3::exp(z_.segment<3>(6 * s + 3))).normalized();
+      w[s] = (so3::log(q0_[s].conjugate() * q[s]) + off_[s]) / h;
     }
   }
   if (bdf2_) remember_end(rod);

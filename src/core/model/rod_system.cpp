@@ -1,18 +1,13 @@
 #include "corde_sim/model/rod_system.h"
 
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+
+#include "corde_sim/math/so3.h"
 
 namespace corde {
 
 namespace {
-
-Mat3 skew(const Vec3& v) {
-  Mat3 m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 // What one bending-twist element needs: sigma, r = conj(a) (x) b = (w, v), and e = dV/du.
 struct BendParts {
@@ -31,157 +26,6 @@ BendParts bend_parts(const Quat& a, const Quat& b, double rest, const Vec3& k, c
 }
 
 }  // namespace
-
-// ---------------------------------------------------------------------------------------------
-// BlockTridiag
-
-void BlockTridiag::resize(int blocks) {
-  diag.resize(blocks);
-  lower.resize(std::max(0, blocks - 1));
-}
-
-void BlockTridiag::set_zero() {
-  for (Mat6& m : diag) m.setZero();
-  for (Mat6& m : lower) m.setZero();
-}
-
-void BlockTridiag::add(int r, int c, const Mat3& m) {
-  const int br = r / 6, bc = c / 6, ro = r % 6, co = c % 6;
-  if (br == bc) {
-    diag[br].block<3, 3>(ro, co) += m;
-    if (r != c) diag[br].block<3, 3>(co, ro) += m.transpose();
-  } else if (br == bc + 1) {
-    lower[bc].block<3, 3>(ro, co) += m;
-  } else {
-    lower[br].block<3, 3>(co, ro) += m.transpose();
-  }
-}
-
-void BlockTridiag::fix(int i) {
-  const int k = i / 6, o = i % 6;
-  diag[k].row(o).setZero();
-  diag[k].col(o).setZero();
-  diag[k](o, o) = 1.0;
-  if (k < static_cast<int>(lower.size())) lower[k].col(o).setZero();
-  if (k > 0) lower[k - 1].row(o).setZero();
-}
-
-void BlockTridiag::multiply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const {
-  y->resize(size());
-  const int n = blocks();
-  for (int k = 0; k < n; ++k) {
-    Vec6 acc = diag[k] * x.segment<6>(6 * k);
-    if (k > 0) acc += lower[k - 1] * x.segment<6>(6 * k - 6);
-    if (k + 1 < n) acc += lower[k].transpose() * x.segment<6>(6 * k + 6);
-    y->segment<6>(6 * k) = acc;
-  }
-}
-
-Eigen::MatrixXd BlockTridiag::dense() const {
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(size(), size());
-  for (int k = 0; k < blocks(); ++k) {
-    a.block<6, 6>(6 * k, 6 * k) = diag[k];
-    if (k + 1 < blocks()) {
-      a.block<6, 6>(6 * k + 6, 6 * k) = lower[k];
-      a.block<6, 6>(6 * k, 6 * k + 6) = lower[k].transpose();
-    }
-  }
-  return a;
-}
-
-Eigen::SparseMatrix<double> BlockTridiag::sparse() const {
-  std::vector<Eigen::Triplet<double>> trip;
-  trip.reserve(static_cast<size_t>(blocks()) * 36 * 3);
-  for (int k = 0; k < blocks(); ++k)
-    for (int i = 0; i < 6; ++i)
-      for (int j = 0; j < 6; ++j) {
-        if (diag[k](i, j) != 0.0) trip.emplace_back(6 * k + i, 6 * k + j, diag[k](i, j));
-        if (k + 1 < blocks() && lower[k](i, j) != 0.0) {
-          trip.emplace_back(6 * k + 6 + i, 6 * k + j, lower[k](i, j));
-          trip.emplace_back(6 * k + j, 6 * k + 6 + i, lower[k](i, j));
-        }
-      }
-  Eigen::SparseMatrix<double> a(size(), size());
-  a.setFromTriplets(trip.begin(), trip.end());
-  return a;
-}
-
-// ---------------------------------------------------------------------------------------------
-// BlockTridiagSolver: S_0 = A_00, S_k = A_kk - C_{k-1} C_{k-1}^T with L_kk = chol(S_k) and
-// C_k = A_{k+1,k} L_kk^-T.
-
-namespace {
-
-// Cholesky of the 6x6 s (lower triangle read) into l (lower triangle written; the strict upper
-// triangle gets finite values of no meaning) and the inverse of its diagonal; false when a pivot
-// l_jj^2 is <= min_pivot (or NaN). Left-looking, a whole column at a time: column operations
-// vectorise where element-wise loops would not.
-bool cholesky6(const Mat6& s, double min_pivot, Mat6* l, Vec6* inv_diag) {
-  for (int j = 0; j < 6; ++j) {
-    Vec6 col = s.col(j);
-    for (int k = 0; k < j; ++k) col -= (*l)(j, k) * l->col(k);
-    if (!(col(j) > min_pivot)) return false;
-    const double inv = 1.0 / std::sqrt(col(j));
-    (*inv_diag)(j) = inv;
-    l->col(j) = inv * col;
-  }
-  return true;
-}
-
-// x = b L^-T for the factor l of cholesky6 (column j of x solves x L^T = b for that column by
-// substitution), accumulated a whole column at a time for the same reason.
-void right_solve_lt(const Mat6& l, const Vec6& inv_diag, const Mat6& b, Mat6* x) {
-  for (int j = 0; j < 6; ++j) {
-    Vec6 col = b.col(j);
-    for (int m = 0; m < j; ++m) col -= l(j, m) * x->col(m);
-    x->col(j) = inv_diag(j) * col;
-  }
-}
-
-}  // namespace
-
-bool BlockTridiagSolver::factor(const BlockTridiag& a, double min_pivot) {
-  const int n = a.blocks();
-  if (static_cast<int>(l_inv_t_.size()) < n) {
-    l_inv_t_.resize(n);
-    l_lower_.resize(n);
-  }
-  Mat6 s, l;
-  Vec6 inv;
-  for (int k = 0; k < n; ++k) {
-    s = a.diag[k];
-    if (k > 0) {
-      // S -= C C^T on the lower triangle only (all cholesky6 reads), in column pairs: a third
-      // fewer products than the full block.
-      const Mat6& c = l_lower_[k - 1];
-      s.block<6, 2>(0, 0).noalias() -= c * c.topRows<2>().transpose();
-      s.block<4, 2>(2, 2).noalias() -= c.middleRows<4>(2) * c.middleRows<2>(2).transpose();
-      s.block<2, 2>(4, 4).noalias() -= c.bottomRows<2>() * c.bottomRows<2>().transpose();
-    }
-    if (!cholesky6(s, min_pivot, &l, &inv)) return false;
-    // Keeps L^-T (column j of it is row j of L^-1) so that the solves multiply by it, which
-    // vectorises, instead of substituting element by element; and C = A_{k+1,k} L^-T.
-    right_solve_lt(l, inv, Mat6::Identity(), &l_inv_t_[k]);
-    if (k + 1 < n) right_solve_lt(l, inv, a.lower[k], &l_lower_[k]);
-  }
-  blocks_ = n;
-  return true;
-}
-
-void BlockTridiagSolver::solve(Eigen::VectorXd* b) const {
-  const int n = blocks_;
-  Vec6 y;
-  for (int k = 0; k < n; ++k) {
-    y = b->segment<6>(6 * k);
-    if (k > 0) y.noalias() -= l_lower_[k - 1] * b->segment<6>(6 * k - 6);
-    b->segment<6>(6 * k).noalias() = l_inv_t_[k].transpose() * y;
-  }
-  for (int k = n - 1; k >= 0; --k) {
-    y = b->segment<6>(6 * k);
-    if (k + 1 < n) y.noalias() -= l_lower_[k].transpose() * b->segment<6>(6 * k + 6);
-    b->segment<6>(6 * k).noalias() = l_inv_t_[k] * y;
-  }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Term Hessians
@@ -243,7 +87,7 @@ void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k
   // Gauss-Newton blocks J^T K J expand into one product P = S K S and Q = K S:
   // Ja^T K Ja = g^2 (w^2 K - P - w (Q + Q^T)), Jb^T K Jb = g^2 (w^2 K - P + w (Q + Q^T)),
   // Ja^T K Jb = g^2 (w (Q^T - Q) - P - w^2 K).
-  const Mat3 sv = skew(p.v);
+  const Mat3 sv = so3::skew(p.v);
   const Vec3 lk = rest * k;
   const Mat3 q = lk.asDiagonal() * sv;
   const Mat3 pp = sv * q;
@@ -263,7 +107,7 @@ void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k
   if (hab) {
     *hab = g2 * (w * (q.transpose() - q) - pp - kw2);
     if (!definite)
-      *hab += (0.5 * g) * (p.v * p.e.transpose() + p.e * p.v.transpose() + w * skew(p.e) -
+      *hab += (0.5 * g) * (p.v * p.e.transpose() + p.e * p.v.transpose() + w * so3::skew(p.e) -
                            ev * Mat3::Identity());
   }
 }

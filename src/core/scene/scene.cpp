@@ -656,7 +656,7 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
                   e.result.residual, e.result.iterations, e.result.load_steps,
                   e.result.load_steps == 1 ? "" : "s");
     scene.settled.push_back("rod '" + rod.name() + "'" + buf);
-    if (e.negative_modes > 0)
+    if (e.potential && e.negative_modes > 0)
       scene.warnings.push_back(entries[i].equilibrium->path() + ": the equilibrium of rod '" +
                                rod.name() + "' is unstable (" + std::to_string(e.negative_modes) +
                                " negative Hessian eigenvalues): the run will leave it");

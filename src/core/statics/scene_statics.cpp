@@ -91,6 +91,9 @@ int motion_steps(const Rod& rod, double t) {
 void classify(Rod* rod, const Vec3& gravity, double t, RodEquilibrium* e) {
   const Eigen::SparseMatrix<double> h = static_hessian(*rod, gravity, t);
   e->negative_modes = e->zero_modes = 0;
+  e->potential = true;
+  for (const Load& l : rod->loads())
+    if (l.kind == Load::Kind::kTorque && l.scale(t) != 0.0) e->potential = false;
   if (h.rows() == 0) return;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
   const Eigen::VectorXd d = ldlt.vectorD();
@@ -165,7 +168,7 @@ std::string not_converged(const RodEquilibrium& e, double t) {
 }
 
 bool held(const Scene& scene, const Rod& rod, double t) {
-  if (!rod.node_drives().empty()) return true;
+  if (!rod.node_drives().empty() || !rod.node_constraints().empty()) return true;
   for (const GraspSpec& g : scene.grasps)
     if (g.rod == rod.name() && grasp_holds(g, t, 0.0)) return true;
   return false;
@@ -182,13 +185,6 @@ std::string rod_unsupported(const Scene& scene, const Rod& rod, double t) {
              std::to_string(l.index) +
              " is a follower load (kind: follower), which turns with the rod and has no potential "
              "energy, so statics cannot solve for it; use a dead load or a dynamic run";
-  if (!rod.node_constraints().empty()) {
-    const NodeConstraint& c = rod.node_constraints().front();
-    return who + ": node " + std::to_string(c.node) + " slides on a " +
-           (c.kind == NodeConstraint::Kind::kLine ? "line" : "plane") +
-           " (a sliding clamp, line: or plane:), which statics does not handle (it holds nodes "
-           "only where drives put them); fix the node or use a dynamic run";
-  }
   if (!rod.segment_constraints().empty())
     return who + ": segment " + std::to_string(rod.segment_constraints().front().segment) +
            " turns about an axis (free_axis:, or a clamp with twist: free), which statics does "
@@ -285,7 +281,11 @@ std::string statics_summary(const Scene& scene, const SceneEquilibrium& eq) {
                   e.attempts, e.attempts == 1 ? "" : "s");
     out += buf;
     if (r.converged) {
-      if (e.negative_modes < 0)
+      if (!e.potential)
+        out +=
+            "           stability not judged: dead torques act, which have no potential "
+            "energy, so the Hessian's signs do not tell\n";
+      else if (e.negative_modes < 0)
         out += "           stability unknown (the Hessian's factorisation failed)\n";
       else if (e.negative_modes > 0)
         out += "           UNSTABLE: the Hessian has " + std::to_string(e.negative_modes) +

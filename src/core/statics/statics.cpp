@@ -7,6 +7,9 @@
 #include <utility>
 #include <vector>
 
+#include "corde_sim/linalg/block_tridiag_sparse.h"
+#include "corde_sim/linalg/newton.h"
+#include "corde_sim/math/so3.h"
 #include "corde_sim/model/rod_system.h"
 
 namespace corde {
@@ -18,13 +21,6 @@ constexpr int kColours = 5;
 constexpr int kReach = 2;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
 
-// The unit quaternion exp(theta/2): a rotation by |theta| about theta.
-Quat exp_half(const Vec3& theta) {
-  const double a = theta.norm();
-  if (a < 1e-300) return Quat::Identity();
-  return Quat(Eigen::AngleAxisd(a, theta / a));
-}
-
 // The unknowns of one rod and the energy, residual and Hessian as functions of them. The rod's
 // loads are taken out while it lives (its force computation then holds only internal forces and
 // gravity) and added back here with the continuation factor.
@@ -32,14 +28,15 @@ class Problem {
  public:
   Problem(Rod& rod, const Vec3& gravity, double t, const StaticOptions& options)
       : rod_(rod), gravity_(gravity), t_(t), opt_(options) {
-    // Follower loads have no potential and sliding constraints are not among the unknowns here.
+    // Follower loads have no potential; segments turning about an axis are not among the
+    // unknowns here.
     for (const Load& l : rod_.loads())
       if (l.follower)
         throw std::invalid_argument("statics: rod '" + rod_.name() +
                                     "' has a follower load, which has no potential energy");
-    if (!rod_.node_constraints().empty() || !rod_.segment_constraints().empty())
+    if (!rod_.segment_constraints().empty())
       throw std::invalid_argument("statics: rod '" + rod_.name() +
-                                  "' has line, plane or axis constraints, which statics does "
+                                  "' has a segment turning about an axis, which statics does "
                                   "not handle");
     for (GhostFrame* g : {&rod_.ghost_start(), &rod_.ghost_end()})
       if (g->active) g->frame = ghost_frame_at(*g, t);
@@ -60,13 +57,30 @@ class Problem {
     std::vector<char> node_kin(n + 1, 0), seg_kin(n, 0);
     for (const NodeDrive& d : rod_.node_drives()) node_kin[d.node] = 1;
     for (const SegmentDrive& d : rod_.segment_drives()) seg_kin[d.segment] = 1;
+    // Per node its directions of motion (columns, the free ones first) and how many are free.
+    node_basis_.assign(n + 1, Mat3::Identity());
+    std::vector<int> node_free(n + 1, planar_ ? 2 : 3);
+    if (planar_)
+      for (Mat3& b : node_basis_) b << basis_[0], basis_[1], normal_;
+    anchor_.assign(n + 1, 0);
+    for (int i = 0; i <= n; ++i) anchor_[i] = node_kin[i];
+    for (const NodeConstraint& c : rod_.node_constraints()) {
+      node_free[c.node] = constrained_basis(c, &node_basis_[c.node]);
+      anchor_[c.node] = 1;
+      constrained_ = true;
+      // Onto its line or plane, as the dynamic steps put it.
+      Vec3& x = rod_.positions()[c.node];
+      const Vec3& a = c.direction;
+      x = c.kind == NodeConstraint::Kind::kLine ? Vec3(c.point + a * a.dot(x - c.point))
+                                                : Vec3(x - a * a.dot(x - c.point));
+    }
     start_.assign(2 * n + 1, 0);
     count_.assign(2 * n + 1, 0);
     for (int p = 0; p <= 2 * n; ++p) {
       const bool node = p % 2 == 0;
       const bool kin = node ? node_kin[p / 2] : seg_kin[p / 2];
       start_[p] = ndof_;
-      count_[p] = kin ? 0 : (planar_ ? (node ? 2 : 1) : 3);
+      count_[p] = kin ? 0 : (node ? node_free[p / 2] : (planar_ ? 1 : 3));
       ndof_ += count_[p];
     }
     // Unknown k of item p sits at 6 (p / 2) + 3 (p % 2) + k of the block layout
@@ -114,8 +128,11 @@ class Problem {
         continue;
       }
       for (int k = 0; k < count_[p]; ++k)
-        r(start_[p] + k) = node ? f[i].dot(basis_[k]) : tau[i].dot(axis(i, k)) / lc_;
+        r(start_[p] + k) = node ? f[i].dot(node_basis_[i].col(k)) : tau[i].dot(axis(i, k)) / lc_;
+      if (node && anchor_[i])  // a sliding node: its support takes the rest
+        for (int k = count_[p]; k < 3; ++k) ref2 += std::pow(f[i].dot(node_basis_[i].col(k)), 2);
     }
+    tau_ = std::move(tau);
     if (reference) *reference = std::sqrt(ref2);
     return r;
   }
@@ -187,10 +204,10 @@ class Problem {
       const int i = static_cast<int>(p / 2);
       if (p % 2 == 0) {
         Vec3 dx = Vec3::Zero();
-        for (int k = 0; k < count_[p]; ++k) dx += d(start_[p] + k) * basis_[k];
+        for (int k = 0; k < count_[p]; ++k) dx += d(start_[p] + k) * node_basis_[i].col(k);
         x[i] = x0_[i] + alpha * dx;
       } else {
-        rod_.orientations()[i] = (q0_[i] * exp_half(alpha * rotation(i, d))).normalized();
+        rod_.orientations()[i] = (q0_[i] * so3::exp_exact(alpha * rotation(i, d))).normalized();
       }
     }
     if (linear) return;
@@ -202,11 +219,11 @@ class Problem {
       const Vec3 t = e / len;
       const double dpar = t.dot(de);
       const Vec3 phi = t.cross(de - dpar * t) / len;
-      chords_[s] = ((len + dpar) / len) * (exp_half(phi) * e);
+      chords_[s] = ((len + dpar) / len) * (so3::exp_exact(phi) * e);
     }
     int a = -1;  // last anchor
     for (int i = 0; i < nn; ++i) {
-      if (count_[2 * i] != 0) continue;
+      if (!anchor_[i]) continue;
       if (a < 0) {
         for (int j = i - 1; j >= 0; --j) x[j] = x[j + 1] - chords_[j];
       } else {
@@ -223,9 +240,16 @@ class Problem {
       for (int j = 0; j < nn; ++j) x[j] -= normal_ * normal_.dot(x[j] - x0_[j]);
   }
 
+  // Whether dead torque loads act at this load factor (forces without a potential on rotations).
+  bool has_dead_torques() const {
+    for (const Load& l : loads_)
+      if (l.kind == Load::Kind::kTorque && lambda_ * l.scale(t_) != 0.0) return true;
+    return false;
+  }
+
   // Scales d down so that no node moves more than max_step rod lengths and no segment turns more
-  // than max_step radians.
-  void cap(Eigen::VectorXd* d) {
+  // than max_step radians; returns the factor applied.
+  double cap(Eigen::VectorXd* d) {
     double worst = 1.0;
     for (size_t p = 0; p < start_.size(); ++p) {
       if (count_[p] == 0) continue;
@@ -234,6 +258,36 @@ class Problem {
       worst = std::max(worst, m / limit);
     }
     *d /= worst;
+    return 1.0 / worst;
+  }
+
+  // Adds to the Hessian from system_matrix() (same layout and unknowns) the skew parts that make
+  // it the Jacobian of minus the residual along the retraction: per free segment
+  // -[tau / 2 + m]x / lc^2 in its rotation block (body frame, in its basis), tau the body torque
+  // of all forces at the current state and m that of the dead torque loads. The first is the
+  // retraction's ((1/2) [g]x, g the body gradient, model/rod_system.h); the second the turning of
+  // the dead torques against the body, which no potential's Hessian holds: with large rotations
+  // it can leave the symmetric part indefinite at an equilibrium that dynamics reaches. Zero in
+  // the planar case.
+  void add_torque_jacobian(BlockTridiag* a) {
+    residual();
+    std::vector<Vec3> w = tau_;
+    for (Vec3& v : w) v *= 0.5;
+    for (const Load& l : loads_) {
+      const double k = lambda_ * l.scale(t_);
+      if (k == 0.0 || l.kind != Load::Kind::kTorque) continue;
+      w[l.index] += rod_.orientations()[l.index].conjugate() * (k * l.value);
+    }
+    const int ns = rod_.num_segments();
+    Mat6 t;
+    for (int s = 0; s < ns; ++s) {
+      const int p = 2 * s + 1;
+      if (count_[p] == 0) continue;
+      basis_block(s, &t);
+      const Mat3 tb = t.bottomRightCorner<3, 3>();
+      a->diag[s].bottomRightCorner<3, 3>() -= tb.transpose() * so3::skew(w[s]) * tb;
+      for (int k = count_[p]; k < 3; ++k) a->fix(3 * p + k);
+    }
   }
 
   // The Hessian in the block layout of model/rod_system.h, in the scaled unknowns: each item's 3x3
@@ -262,7 +316,7 @@ class Problem {
       std::vector<Mat6>& l = a->lower;
       int nb_done = 0;
       Mat6 tk, tn;
-      if (!planar_) {  // the map is a diagonal scaling
+      if (!planar_ && !constrained_) {  // the map is a diagonal scaling
         Vec6 sc;
         sc << 1.0, 1.0, 1.0, 1.0 / lc_, 1.0 / lc_, 1.0 / lc_;
         for (Mat6& m : d) m = sc.asDiagonal() * m * sc.asDiagonal();
@@ -399,11 +453,15 @@ class Problem {
   // planar case the plane's normal in the body first) over lc.
   void basis_block(int k, Mat6* t) const {
     t->setZero();
-    if (!planar_) {
+    if (!planar_ && !constrained_) {
       t->diagonal() << 1.0, 1.0, 1.0, 1.0 / lc_, 1.0 / lc_, 1.0 / lc_;
       return;
     }
-    for (int c = 0; c < 3; ++c) t->block<3, 1>(0, c) = c < 2 ? basis_[c] : normal_;
+    t->topLeftCorner<3, 3>() = node_basis_[k];
+    if (!planar_) {
+      if (k < rod_.num_segments()) t->bottomRightCorner<3, 3>().diagonal().setConstant(1.0 / lc_);
+      return;
+    }
     if (k >= rod_.num_segments()) {
       t->bottomRightCorner<3, 3>().setIdentity();
       return;
@@ -413,6 +471,36 @@ class Problem {
     t->block<3, 1>(3, 3) = a / lc_;
     t->block<3, 1>(3, 4) = b / lc_;
     t->block<3, 1>(3, 5) = a.cross(b) / lc_;
+  }
+
+  // Directions of motion of a node on a line or a plane (columns of b, orthonormal, the free ones
+  // first), within the plane of a planar problem; returns how many are free.
+  int constrained_basis(const NodeConstraint& c, Mat3* b) const {
+    const Vec3& a = c.direction;
+    const bool line = c.kind == NodeConstraint::Kind::kLine;
+    constexpr double kParallel = 1e-9;
+    if (!planar_) {
+      const Vec3 u = a.unitOrthogonal();
+      if (line) {
+        *b << a, u, a.cross(u);
+        return 1;
+      }
+      *b << u, a.cross(u), a;
+      return 2;
+    }
+    const Vec3& n = normal_;
+    if (line) {  // free along the line if it lies in the plane
+      if (std::abs(a.dot(n)) > kParallel) return 0;
+      *b << a, n.cross(a), n;
+      return 1;
+    }
+    if (n.cross(a).norm() <= kParallel) {  // the same plane
+      *b << basis_[0], basis_[1], n;
+      return 2;
+    }
+    const Vec3 u = n.cross(a).normalized();  // the planes' common line
+    *b << u, n, u.cross(n);
+    return 1;
   }
 
   // Body axis of rotation unknown k of segment s.
@@ -434,97 +522,187 @@ class Problem {
   StaticOptions opt_;
   std::vector<Load> loads_;
   double lambda_ = 1.0, length_ = 0.0, lc_ = 1.0;
-  bool planar_ = false;
+  bool planar_ = false, constrained_ = false;
   Vec3 normal_ = Vec3::Zero();
   Vec3 basis_[3];
+  std::vector<Mat3> node_basis_;  // per node: its directions of motion, the free ones first
+  std::vector<char> anchor_;      // per node: held or sliding (the retraction builds from them)
+  std::vector<Vec3> tau_;         // body torques of the last residual(), loads included
   std::vector<int> start_, count_, full_;
   int ndof_ = 0, evaluations_ = 0;
   std::vector<Vec3> x0_, chords_;
   std::vector<Quat> q0_;
 };
 
-// Backtracking line search along d from the current state, r the residual there: Armijo on the
-// energy, or, where the energy change is lost in round-off, a drop of the residual. On success
-// the rod is at the accepted point and r its residual.
-bool line_search(Problem* pb, const Eigen::VectorXd& d, Eigen::VectorXd* r, double* ref) {
-  const double slope = -r->dot(d);  // d merit / d alpha at 0
-  if (!(slope < 0.0)) return false;
-  pb->save_base();
-  const double phi0 = pb->merit(d, 0.0), noise = pb->energy_noise(), r0 = r->norm();
-  double alpha = 1.0;
-  for (int ls = 0; ls < 40; ++ls, alpha *= 0.5) {
-    pb->move(d, alpha);
-    const double dphi = pb->merit(d, alpha) - phi0;
-    if (!std::isfinite(dphi)) continue;
-    const bool armijo = dphi <= 1e-4 * alpha * slope;
-    if (!armijo && std::abs(dphi) > noise) continue;
-    Eigen::VectorXd trial = pb->residual(ref);
-    if (armijo || trial.norm() < r0) {
-      *r = std::move(trial);
-      return true;
-    }
+// Newton iterations at one load factor on the shared solver (linalg/newton.h). Each iteration
+// tries, until a line search accepts: the Hessian with the last iteration's Levenberg shift (a
+// tenth of it; none at first), with a line search on the energy; then, where that fails without a
+// shift and dead torques act, the full Jacobian of the residual (add_torque_jacobian, by block LU)
+// with a line search on |r|^2 / 2: Newton's method proper where dead torques turn the rod far (the
+// symmetric part alone turns indefinite there and shifted steps crawl); then growing shifts (x10)
+// up to the largest diagonal entry.
+class StaticsNewton : public NewtonProblem {
+ public:
+  StaticsNewton(Problem* pb, double tol, StaticResult* res)
+      : pb_(*pb), tol_(tol), res_(*res), floor_(pb->round_off_floor()) {
+    r_ = pb_.residual(&ref_);
   }
-  pb->restore_base();
-  return false;
-}
 
-// Newton iterations at the current load factor until the residual is below tol * reference or
-// at the round-off floor.
-bool newton(Problem* pb, double tol, const StaticOptions& opt, StaticResult* res) {
-  const int n = pb->dofs();
-  double ref = 0.0;
-  Eigen::VectorXd r = pb->residual(&ref);
-  double mu_last = 0.0, last_norm = std::numeric_limits<double>::infinity();
-  BlockTridiag h, a;
-  BlockTridiagSolver solver;
-  Eigen::VectorXd b, d;
-  const double floor = pb->round_off_floor();
-  auto finish = [&](bool stalled) {
-    res->residual = r.norm();
-    res->reference_force = ref;
-    res->relative_residual = ref > 0.0 ? res->residual / ref : res->residual;
-    res->round_off_floor = floor;
-    return res->residual <= tol * ref || (stalled && res->residual <= floor);
-  };
-  if (n == 0) return finish(true);
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    const double norm = r.norm();
-    if (norm <= tol * ref) return finish(false);
-    // At the noise floor, stop once an iteration no longer halves the residual.
-    if (norm <= floor && norm > 0.5 * last_norm) return finish(true);
-    last_norm = norm;
-    pb->system_matrix(&h);
-    ++res->iterations;
-    double diag = 0.0;
-    for (int i = 0; i < n; ++i) {
-      const int j = pb->block_index(i);
-      diag = std::max(diag, std::abs(h.diag[j / 6](j % 6, j % 6)));
-    }
-    // Levenberg: the smallest shift (x10 steps) that makes the matrix positive definite and
-    // gives a step the line search accepts.
-    double mu = mu_last > 1e-12 * diag ? 0.1 * mu_last : 0.0;
-    bool ok = false;
-    while (!ok && mu <= diag) {
-      a = h;
-      for (int i = 0; i < n && mu > 0.0; ++i) {
-        const int j = pb->block_index(i);
-        a.diag[j / 6](j % 6, j % 6) += mu;
-      }
-      ok = solver.factor(a, 1e-13 * diag);
-      if (ok) {
-        pb->to_blocks(r, &b);
-        solver.solve(&b);  // H d = -grad = r
-        pb->from_blocks(b, &d);
-        pb->cap(&d);
-        ok = line_search(pb, d, &r, &ref);
-      }
-      if (!ok) mu = mu > 0.0 ? 10.0 * mu : 1e-10 * diag;
-    }
-    if (mu > 0.0) ++res->shifted_iterations;
-    mu_last = mu;
-    if (!ok) return finish(true);
+  bool run(int max_iterations) {
+    if (pb_.dofs() == 0) return finish(true);
+    NewtonOptions o;
+    o.max_iterations = max_iterations;
+    o.keep_merit = false;  // the energy's work term is measured from each iterate
+    o.line_search.max_trials = 40;
+    o.line_search.require_descent = true;
+    o.line_search.armijo_on_change = true;
+    const NewtonOutcome out = newton_solve(this, o);
+    res_.iterations += out.iterations;
+    return finish(out.stop == NewtonStop::kStopped);
   }
-  return finish(false);
+
+  double residual_norm() override { return r_.norm(); }
+
+  Check check(double norm) override {
+    if (norm <= tol_ * ref_) return Check::kConverged;
+    // At the noise floor, stop once an iteration no longer halves the residual.
+    if (norm <= floor_ && norm > 0.5 * last_norm_) return Check::kStop;
+    last_norm_ = norm;
+    return Check::kContinue;
+  }
+
+  bool direction(int attempt, double* slope) override {
+    if (attempt == 0) {
+      pb_.system_matrix(&h_);
+      diag_ = 0.0;
+      for (int i = 0; i < pb_.dofs(); ++i) {
+        const int j = pb_.block_index(i);
+        diag_ = std::max(diag_, std::abs(h_.diag[j / 6](j % 6, j % 6)));
+      }
+      mu_ = mu_last_ > 1e-12 * diag_ ? 0.1 * mu_last_ : 0.0;
+      full_next_ = full_tried_ = false;
+    }
+    for (;;) {
+      if (full_next_) {
+        full_next_ = false;
+        a_ = h_;
+        pb_.add_torque_jacobian(&a_);
+        if (lu_.factor(a_)) {
+          solve(&lu_);
+          const double scale = pb_.cap(&d_);
+          full_ = true;
+          pb_.save_base();
+          phi0_ = 0.5 * r_.squaredNorm();
+          *slope = -scale * r_.squaredNorm();
+          return true;
+        }
+      }
+      if (mu_ > diag_) return false;
+      a_ = h_;
+      for (int i = 0; i < pb_.dofs() && mu_ > 0.0; ++i) {
+        const int j = pb_.block_index(i);
+        a_.diag[j / 6](j % 6, j % 6) += mu_;
+      }
+      if (chol_.factor(a_, 1e-13 * diag_)) {
+        solve(&chol_);
+        pb_.cap(&d_);
+        full_ = false;
+        pb_.save_base();
+        phi0_ = pb_.merit(d_, 0.0);
+        noise0_ = pb_.energy_noise();
+        *slope = -r_.dot(d_);  // d merit / d alpha at 0
+        return true;
+      }
+      escalate();
+    }
+  }
+
+  Retry rejected(int attempt) override {
+    (void)attempt;
+    pb_.restore_base();
+    if (!full_) escalate();
+    if (mu_ > diag_ && !full_next_) {
+      if (mu_ > 0.0) ++res_.shifted_iterations;
+      return Retry::kStop;
+    }
+    return Retry::kSameIteration;
+  }
+
+  void accepted(int attempt) override {
+    (void)attempt;
+    const double mu = full_ ? 0.0 : mu_;
+    if (mu > 0.0) ++res_.shifted_iterations;
+    mu_last_ = mu;
+  }
+
+  void move(double alpha) override {
+    pb_.move(d_, alpha);
+    have_trial_ = false;
+  }
+  double merit(double alpha) override {
+    if (!full_) return pb_.merit(d_, alpha);
+    trial_residual();
+    return 0.5 * trial_.squaredNorm();
+  }
+  void base_merit(MeritAtIterate* m) override {
+    m->phi = phi0_;
+    m->noise = full_ ? 0.0 : noise0_;
+  }
+  double trial_residual() override {
+    if (!have_trial_) trial_ = pb_.residual(&ref_trial_);
+    have_trial_ = true;
+    return trial_.norm();
+  }
+  void accept_trial() override {
+    r_.swap(trial_);
+    ref_ = ref_trial_;
+    have_trial_ = false;
+  }
+
+ private:
+  // d = A^-1 r in the unknowns (H d = -grad = r).
+  template <class Solver>
+  void solve(Solver* s) {
+    pb_.to_blocks(r_, &b_);
+    s->solve(&b_);
+    pb_.from_blocks(b_, &d_);
+  }
+  // After a failed factorisation or search on the Hessian: the full Jacobian once, where no
+  // shift was needed yet; else a larger shift.
+  void escalate() {
+    if (!full_tried_ && mu_ == 0.0 && pb_.has_dead_torques()) {
+      full_tried_ = full_next_ = true;
+      return;
+    }
+    mu_ = mu_ > 0.0 ? 10.0 * mu_ : 1e-10 * diag_;
+  }
+  bool finish(bool stalled) {
+    res_.residual = r_.norm();
+    res_.reference_force = ref_;
+    res_.relative_residual = ref_ > 0.0 ? res_.residual / ref_ : res_.residual;
+    res_.round_off_floor = floor_;
+    return res_.residual <= tol_ * ref_ || (stalled && res_.residual <= floor_);
+  }
+
+  Problem& pb_;
+  double tol_;
+  StaticResult& res_;
+  double floor_;
+  Eigen::VectorXd r_, trial_, b_, d_;
+  double ref_ = 0.0, ref_trial_ = 0.0, phi0_ = 0.0, noise0_ = 0.0;
+  bool have_trial_ = false;
+  double last_norm_ = std::numeric_limits<double>::infinity();
+  BlockTridiag h_, a_;
+  BlockTridiagSolver chol_;
+  BlockTridiagLU lu_;
+  double diag_ = 0.0, mu_ = 0.0;
+  bool full_ = false, full_next_ = false, full_tried_ = false;
+  double mu_last_ = 0.0;  // the last iteration's shift (within this load step)
+};
+
+bool newton(Problem* pb, double tol, const StaticOptions& opt, StaticResult* res) {
+  StaticsNewton solver(pb, tol, res);
+  return solver.run(opt.max_iterations);
 }
 
 }  // namespace
@@ -568,7 +746,7 @@ Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double
   std::vector<int> reduced(a.size(), -1);
   for (int i = 0; i < n; ++i) reduced[pb.block_index(i)] = i;
   std::vector<Eigen::Triplet<double>> trip;
-  const Eigen::SparseMatrix<double> full = a.sparse();
+  const Eigen::SparseMatrix<double> full = to_sparse(a);
   for (int c = 0; c < full.outerSize(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(full, c); it; ++it) {
       const int i = reduced[it.row()], j = reduced[it.col()];
