@@ -18,9 +18,11 @@ class Stepper : public ContactResponse {
   // stage follows, with this stepper as its response; `last`: that stage as the last step left it
   // (its impulses predict this step's; null: none).
   virtual void free_step(World& world, bool contacts, const ContactSystem* last) = 0;
-  // Stage 4: completes the step (what the free step and the contacts left open: the integration
-  // with the contact forces, the drives and constraints) and records its results: each support's
-  // reaction over the step (boundary.h) and the step's statistics.
+  // Stage 4: completes the step (what the free step and the contacts left open: the explicit
+  // integration with the contact forces, the drives and constraints) and its statistics. After it
+  // every support holds the reaction it exerted over the step (boundary.h), whichever stepper ran:
+  // the explicit one as it sets the drives (Rod::apply_drives), the implicit one from the supports'
+  // residuals of its Newton solve, where the drives are held.
   virtual void commit(World& world, bool contacts) = 0;
 };
 
