@@ -24,8 +24,7 @@
 
 namespace corde {
 
-class ImplicitEuler;
-struct ImplicitResult;
+class ContactResponse;
 class Rod;
 class World;
 
@@ -44,7 +43,7 @@ struct ContactSettings {
   double push_out = 0.2;        // fraction of a penetration removed per step (Baumgarte)
   double max_push_speed = 0.5;  // m/s, cap on the separating speed that removes penetration
   // Implicit integrator: rounds of sweeps, each followed by the rods' true (stiffness-coupled)
-  // response to the impulses (ContactSystem::solve_implicit).
+  // response to the impulses (ContactSystem::solve with a coupled response).
   int implicit_rounds = 30;  // at most
   // Sweeps per round: the sweeps answer with each node's mass alone, which a stiff rod's true
   // response corrects in the round anyway, so sweeping them to convergence is wasted (whole runs
@@ -124,22 +123,21 @@ class ContactSystem {
   // contact. A world without that pays nothing.
   static bool needed(const World& world);
 
-  // Called between the forces (Rod::compute_forces at t) and the integration: adds the contact
-  // forces p / h to the rods' node forces.
-  void solve(World& world, double h);
-  // The same for the implicit integrator, called after every rod took its implicit step without
-  // contacts (steppers[r] for rod r): detection at the step's start against those velocities, then
-  // rounds of Gauss-Seidel sweeps (with each node's own mass, which responds more than the stiff
-  // rod does, so impulses approach from below) each followed by every touched rod's linearised
-  // response to the impulses so far (ImplicitEuler::respond: the compliance of the step's own
-  // factorisation), which leaves the rods at their final state.
-  // A rod whose step was BDF2 and that meets a contact the step would close is stepped again as
-  // backward Euler (ImplicitEuler::restep_first_order; its result replaces (*results)[r]).
-  void solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers,
-                      std::vector<ImplicitResult>* results = nullptr);
+  // The contact stage of a step from the world's time t to t + h, after the integrator's free
+  // step, with `response` the integrator's view (contact_response.h): detection at the step's
+  // start against each rod's motion without contacts, then the impulses.
+  // Lumped response (explicit methods): Gauss-Seidel sweeps, each node answering with its own
+  // mass; the impulses are added to the rods' node forces as p / h (the commit integrates them).
+  // Coupled response (implicit methods): a rod whose step may be retaken (BDF2) and that meets a
+  // contact the step would close is stepped again (ContactResponse::retake), then rounds of
+  // sweeps (with each node's own mass, which responds more than the stiff rod does, so impulses
+  // approach from below), each followed by every touched rod's true response to the impulses so
+  // far (ContactResponse::respond), which leaves the rods at their final state.
+  void solve(World& world, double h, ContactResponse& response);
 
   const std::vector<Contact>& contacts() const { return contacts_; }
-  // Implicit integrator: the node impulses rod r received in the last step (null if none).
+  // Coupled response (implicit methods): the node impulses rod r received in the last step (null
+  // if none).
   const std::vector<Vec3>* last_impulses(int r) const {
     return r < static_cast<int>(last_impulse_.size()) && !last_impulse_[r].empty()
                ? &last_impulse_[r]
@@ -153,8 +151,16 @@ class ContactSystem {
   const ContactStats& stats() const { return stats_; }
 
  private:
-  void detect(World& world, double h);
+  // Each rod's motion without contacts (velocity_, inv_mass_, omega_).
+  void take_free_motion(const World& world, double h, const ContactResponse& response);
+  // Detection from the rods' start positions and velocities as the response gives them.
+  void detect(World& world, double h, const ContactResponse& response);
   void detect_rod_pairs(World& world, double h);
+  // Coupled response: retakes the steps of rods meeting a contact their step would close (true:
+  // some rod was stepped again).
+  bool retake_closing(World& world, double h, ContactResponse& response);
+  // Coupled response: rounds of sweeps and the rods' true response.
+  void solve_rounds(World& world, double h, ContactResponse& response);
   bool pair_list_valid(const World& world) const;
   void build_pair_list(const World& world);
   void warm_start();
@@ -211,7 +217,9 @@ class ContactSystem {
   std::vector<RollRow> rolls_;  // per contact when rolling resistance is on
   bool spin_ = false;           // the sweeps track the segments' angular velocities (omega_)
   std::vector<std::vector<Vec3>> omega_, torque_;  // per rod and segment (world)
-  std::vector<std::vector<Vec3>> held_x_, held_v_, impulse_, change_v_;  // implicit: per rod
+  // Per rod, during detect only: its start positions and velocities (the response's).
+  std::vector<const std::vector<Vec3>*> start_x_, start_v_;
+  std::vector<std::vector<Vec3>> held_v_, impulse_, change_v_;  // coupled: per rod
   std::vector<std::vector<Vec3>>
       last_dv_;  // implicit: the true response to the last round's change
   std::vector<char> touched_;

@@ -112,7 +112,7 @@ class ImplicitEuler {
   // Takes the last step again from its start state, as a backward-Euler step (no prediction):
   // a BDF2 step moves the rod by a third of its last step's motion whatever the contact impulses
   // do (x = (4 x^n - x^{n-1}) / 3 + 2h/3 v), so a rod hitting a contact is stepped this way
-  // (ContactSystem::solve_implicit).
+  // (ImplicitStepper::retake, from the contact solve).
   ImplicitResult restep_first_order(Rod& rod, double t, double h, const Vec3& gravity);
 
   // After step(): sets the rod to the step's result plus the response to node impulses p (N s,

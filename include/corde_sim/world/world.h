@@ -8,17 +8,11 @@
 #include "corde_sim/contact/contact.h"
 #include "corde_sim/contact/obstacle.h"
 #include "corde_sim/contact/obstacle_motion.h"
-#include "corde_sim/integrators/implicit_step.h"
+#include "corde_sim/integrators/explicit_stepper.h"
+#include "corde_sim/integrators/implicit_stepper.h"
 #include "corde_sim/rod/rod.h"
 
 namespace corde {
-
-// The implicit integrator's Newton solves over the last step (Integrator::kImplicitEuler, kBdf2).
-struct ImplicitStats {
-  int iterations = 0;           // Newton iterations, the most any rod took
-  int unconverged = 0;          // rods whose Newton iterations stopped short of the tolerance
-  double worst_residual = 0.0;  // largest residual over its reference scale (ImplicitResult)
-};
 
 struct WorldEnergies {
   Energies total;
@@ -53,15 +47,15 @@ class World {
 
   double time() const { return time_; }
   void set_time(double t) { time_ = t; }
-  // Advances every rod by time_step: keyframed obstacles are posed first; with an explicit
-  // integrator a world without anything to collide runs each rod's fused step, otherwise forces
-  // of every rod, then contacts (detection and the constraint solve), then the integration and
-  // the drives. With an implicit one every rod takes its backward Euler or BDF2 step, then
-  // contacts are solved against those steps (ContactSystem::solve_implicit, with each step's own
-  // compliance: BDF2's effective step 2h/3 in the response).
+  // Advances every rod by time_step, in stages (docs/architecture.md, "The step, stage by
+  // stage"): keyframed obstacles posed; the integrator's free step of every rod (the explicit
+  // methods' forces, or the implicit methods' Newton solve); contacts detected and solved against
+  // that step's response, only when something can collide; the commit (the integration with the
+  // contact forces, drives, constraints, reactions). Without contacts an explicit method runs each
+  // rod's fused step.
   void step();
-  // The implicit integrator's solves in the last step (zero for the explicit methods).
-  const ImplicitStats& implicit_stats() const { return implicit_stats_; }
+  // The implicit integrator's solves in the last implicit step (zero before one).
+  const ImplicitStats& implicit_stats() const { return implicit_.stats(); }
   // Factorisations of the implicit integrator's Newton matrices so far, over all rods (they are
   // kept while the rods barely move: ImplicitOptions::reuse_factor).
   long implicit_factorisations() const;
@@ -81,10 +75,12 @@ class World {
   std::vector<Rod> rods_;
   double time_ = 0.0;
   std::shared_ptr<ContactSystem> contacts_;
-  std::vector<ImplicitEuler> implicit_;  // per rod (scratch and the step's factorisation)
-  ImplicitStats implicit_stats_;
-  std::vector<ImplicitResult> implicit_results_;  // per rod, the last step's (scratch)
-  void step_implicit();
+  ExplicitStepper explicit_;
+  ImplicitStepper implicit_;
+  // The stepper of `integrator`, set up for it: the one place that decides the integrator.
+  Stepper& stepper_for(Integrator integrator);
+  // The contact stage this world steps with (a copy of a world shares its stage until it steps).
+  ContactSystem& own_contacts();
 };
 
 }  // namespace corde

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <limits>
 
+#include "corde_sim/contact/contact_response.h"
 #include "corde_sim/contact/segment_distance.h"
-#include "corde_sim/integrators/implicit_step.h"
 #include "corde_sim/math/so3.h"
 #include "corde_sim/world/world.h"
 
@@ -93,134 +93,67 @@ bool ContactSystem::needed(const World& world) {
   return rods >= 2;
 }
 
-void ContactSystem::solve(World& world, double h) {
-  auto& rods = world.rods();
-  const int nr = static_cast<int>(rods.size());
+void ContactSystem::solve(World& world, double h, ContactResponse& response) {
+  const int nr = static_cast<int>(world.rods().size());
   velocity_.resize(nr);
   inv_mass_.resize(nr);
   omega_.resize(nr);
-  const double t_end = world.time() + h;
   spin_ = tracks_spin(world.contact);
-  // The velocities each node would have after the step without contacts (drives: theirs).
-  for (int r = 0; r < nr; ++r) {
-    Rod& rod = rods[r];
-    const int nn = rod.num_nodes();
-    auto& v = velocity_[r];
-    auto& w = inv_mass_[r];
-    v.resize(nn);
-    w.resize(nn);
-    for (int i = 0; i < nn; ++i) {
-      w[i] = 1.0 / rod.node_masses()[i];
-      v[i] = rod.velocities()[i] + (h * w[i]) * rod.forces()[i];
-    }
-    for (const NodeDrive& d : rod.node_drives()) {
-      w[d.node] = 0.0;
-      if (d.kind == NodeDrive::Kind::kTarget)
-        v[d.node] = (d.target - rod.positions()[d.node]) / h;
-      else
-        drive_position(d, t_end, &v[d.node]);
-    }
-    if (!spin_) continue;
-    // And each segment's world angular velocity after the torques' kick (the integrator's
-    // gyroscopic or torque-free part is left out: it changes it at second order in h).
-    const int ns = rod.num_segments();
-    auto& om = omega_[r];
-    om.resize(ns);
-    for (int s = 0; s < ns; ++s)
-      om[s] =
-          rod.orientations()[s] * Vec3(rod.angular_velocities()[s] +
-                                       h * rod.torques()[s].cwiseQuotient(rod.segment_inertia(s)));
-    for (const SegmentDrive& d : rod.segment_drives()) {
-      if (d.kind == SegmentDrive::Kind::kTarget) {
-        Quat rel = d.target.normalized() * rod.orientations()[d.segment].conjugate();
-        if (rel.w() < 0.0) rel.coeffs() *= -1.0;  // the shorter way, as the drive turns
-        const Eigen::AngleAxisd turn(rel);
-        om[d.segment] = (turn.angle() / h) * turn.axis();
-      } else {
-        drive_orientation(d, t_end, &om[d.segment]);
-      }
-    }
-    for (const SegmentConstraint& c : rod.segment_constraints())
-      om[c.segment] = c.axis * c.axis.dot(om[c.segment]);
+  take_free_motion(world, h, response);
+  detect(world, h, response);
+  if (!response.lumped() && retake_closing(world, h, response)) {
+    take_free_motion(world, h, response);
+    detect(world, h, response);
   }
-  detect(world, h);
   warm_start();
   prepare_sweeps(world);
-  sweep(world.contact, h, world.contact.iterations);
-  finish(world, h, true);
+  if (response.lumped()) {
+    sweep(world.contact, h, world.contact.iterations);
+    finish(world, h, true);
+  } else {
+    solve_rounds(world, h, response);
+    finish(world, h, false);
+  }
 }
 
-void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitEuler>& steppers,
-                                   std::vector<ImplicitResult>* results) {
+void ContactSystem::take_free_motion(const World& world, double h,
+                                     const ContactResponse& response) {
+  const auto& rods = world.rods();
+  for (int r = 0; r < static_cast<int>(rods.size()); ++r)
+    response.free_motion(rods[r], r, world.time(), h, spin_, &velocity_[r], &inv_mass_[r],
+                         &omega_[r]);
+}
+
+// A BDF2 step carries a third of the last step's motion on whatever the impulses do: a rod
+// meeting a contact the step would close (or a penetration) is stepped again as backward Euler,
+// as the steps after it are while the contact lasts (the prediction), and detection redone.
+// Other rods' BDF2 steps stand.
+bool ContactSystem::retake_closing(World& world, double h, ContactResponse& response) {
   auto& rods = world.rods();
   const int nr = static_cast<int>(rods.size());
-  velocity_.resize(nr);
-  inv_mass_.resize(nr);
-  omega_.resize(nr);
-  spin_ = tracks_spin(world.contact);
-  held_x_.resize(nr);
-  held_v_.resize(nr);
-  // Each rod's velocities after its step without contacts (a BDF2 step's: its displacement over
-  // h, which the contacts' gaps follow); detection at the step's start.
-  auto detect_at_start = [&] {
-    for (int r = 0; r < nr; ++r) {
-      Rod& rod = rods[r];
-      if (steppers[r].last_step_second_order()) {
-        const auto& x0 = steppers[r].start_positions();
-        auto& u = velocity_[r];
-        u.resize(x0.size());
-        for (size_t i = 0; i < x0.size(); ++i) u[i] = (rod.positions()[i] - x0[i]) / h;
-      } else {
-        velocity_[r] = rod.velocities();
-      }
-      held_x_[r].swap(rod.positions());
-      held_v_[r].swap(rod.velocities());
-      rod.positions() = steppers[r].start_positions();
-      rod.velocities() = steppers[r].start_velocities();
-    }
-    detect(world, h);
-    for (int r = 0; r < nr; ++r) {
-      rods[r].positions().swap(held_x_[r]);
-      rods[r].velocities().swap(held_v_[r]);
-    }
-  };
-  detect_at_start();
-  // A BDF2 step carries a third of the last step's motion on whatever the impulses do: a rod
-  // meeting a contact the step would close (or a penetration) is stepped again as backward Euler,
-  // as the steps after it are while the contact lasts (the prediction), and detection redone.
-  // Other rods' BDF2 steps stand.
-  bool restep = false, any_bdf2 = false;
-  for (int r = 0; r < nr; ++r) any_bdf2 = any_bdf2 || steppers[r].last_step_second_order();
-  for (size_t k = 0; any_bdf2 && k < contacts_.size(); ++k) {
+  bool retaken = false, any = false;
+  for (int r = 0; r < nr; ++r) any = any || response.may_retake(r);
+  for (size_t k = 0; any && k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
-    const bool a2 = steppers[c.rod_a].last_step_second_order();
-    const bool b2 = c.rod_b >= 0 && steppers[c.rod_b].last_step_second_order();
-    if (!a2 && !b2) continue;
+    if (!response.may_retake(c.rod_a) && !(c.rod_b >= 0 && response.may_retake(c.rod_b))) continue;
     Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
     vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
                               c.s_b * velocity_[c.rod_b][c.seg_b + 1])
                        : c.surface_velocity;
     if (vr.dot(c.normal) >= normal_target(c, world.contact, h)) continue;
     for (int r : {c.rod_a, c.rod_b}) {
-      if (r < 0 || !steppers[r].last_step_second_order()) continue;
-      const ImplicitResult res =
-          steppers[r].restep_first_order(rods[r], world.time(), h, world.gravity);
-      if (results && r < static_cast<int>(results->size())) (*results)[r] = res;
-      restep = true;
+      if (r < 0 || !response.may_retake(r)) continue;
+      response.retake(rods[r], r, world.time(), h, world.gravity);
+      retaken = true;
     }
   }
-  if (restep) detect_at_start();
-  for (int r = 0; r < nr; ++r) {
-    Rod& rod = rods[r];
-    const int nn = rod.num_nodes();
-    if (spin_) take_angular_velocities(rod, r);
-    auto& w = inv_mass_[r];
-    w.resize(nn);
-    for (int i = 0; i < nn; ++i) w[i] = 1.0 / rod.node_masses()[i];
-    for (const NodeDrive& d : rod.node_drives()) w[d.node] = 0.0;
-  }
-  warm_start();
-  prepare_sweeps(world);
+  return retaken;
+}
+
+void ContactSystem::solve_rounds(World& world, double h, ContactResponse& response) {
+  auto& rods = world.rods();
+  const int nr = static_cast<int>(rods.size());
+  held_v_.resize(nr);
   // Rounds: Gauss-Seidel sweeps against the rods' true velocities, with each node's own mass
   // (which responds more than the stiffness-coupled rod does, so they find too little impulse),
   // then the rods' true response to that change of the impulses, scaled by the factor that best
@@ -234,7 +167,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
   // A rod whose step included predicted impulses is answered even without contacts now (the
   // response then takes the prediction back out).
   touched_.assign(nr, 0);
-  for (int r = 0; r < nr; ++r) touched_[r] = steppers[r].has_prediction() ? 1 : 0;
+  for (int r = 0; r < nr; ++r) touched_[r] = response.has_prediction(r) ? 1 : 0;
   for (const Contact& c : contacts_) {
     touched_[c.rod_a] = 1;
     if (c.rod_b >= 0) touched_[c.rod_b] = 1;
@@ -271,7 +204,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
            [&](size_t k) { return contacts_[k].pr; });
     for (int r = 0; r < nr; ++r) {
       if (!touched_[r]) continue;
-      steppers[r].respond(rods[r], impulse_[r], spin_ ? &torque_[r] : nullptr);
+      response.respond(rods[r], r, impulse_[r], spin_ ? &torque_[r] : nullptr);
       velocity_[r] = rods[r].velocities();
       if (spin_) take_angular_velocities(rods[r], r);
     }
@@ -337,7 +270,7 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
         [&](size_t k) { return Vec3(contacts_[k].pr - old_[k].pr); });
     for (int r = 0; r < nr; ++r)
       if (touched_[r])
-        steppers[r].response(rods[r], impulse_[r], &change_v_[r], spin_ ? &torque_[r] : nullptr);
+        response.response(rods[r], r, impulse_[r], &change_v_[r], spin_ ? &torque_[r] : nullptr);
     auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
       return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
     };
@@ -404,7 +337,6 @@ void ContactSystem::solve_implicit(World& world, double h, std::vector<ImplicitE
     else
       last_torque_[r].clear();
   }
-  finish(world, h, false);
 }
 
 double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {
@@ -656,10 +588,16 @@ void ContactSystem::warm_start() {
   }
 }
 
-void ContactSystem::detect(World& world, double h) {
+void ContactSystem::detect(World& world, double h, const ContactResponse& response) {
   contacts_.clear();
   stats_ = ContactStats();
   auto& rods = world.rods();
+  start_x_.resize(rods.size());
+  start_v_.resize(rods.size());
+  for (int r = 0; r < static_cast<int>(rods.size()); ++r) {
+    start_x_[r] = &response.start_positions(rods[r], r);
+    start_v_[r] = &response.start_velocities(rods[r], r);
+  }
   const ContactSettings& cs = world.contact;
   if (world.obstacles && world.obstacles->size() > 0) {
     const ObstacleSet& obs = *world.obstacles;
@@ -667,9 +605,9 @@ void ContactSystem::detect(World& world, double h) {
       const Rod& rod = rods[r];
       if (!rod.contact_options().obstacles) continue;
       const double radius = rod.section().radius;
-      const auto& x = rod.positions();
+      const auto& x = *start_x_[r];
       const auto& v = velocity_[r];
-      const auto& v0 = rod.velocities();
+      const auto& v0 = *start_v_[r];
       const int n = rod.num_segments();
       // Each node as a point, and each segment at its closest interior point: a segment that
       // turns within the step can bring either end down, so one point per segment is not enough.
@@ -780,7 +718,7 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     const ContactOptions& o = rod.contact_options();
     if (!o.self && !(o.rods && with_rods >= 2)) continue;
     const double radius = rod.section().radius;
-    const auto& x = rod.positions();
+    const auto& x = *start_x_[r];
     const auto& v = velocity_[r];
     for (int s = 0; s < rod.num_segments(); ++s) {
       const double grow = radius * (1.0 + cs.skin) + h * std::max(v[s].norm(), v[s + 1].norm());
@@ -819,8 +757,8 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     const auto [rb, sb] = items_[o.j];
     const Rod &rod_a = rods[ra], &rod_b = rods[rb];
     ++stats_.candidate_pairs;
-    const auto& xa = rod_a.positions();
-    const auto& xb = rod_b.positions();
+    const auto& xa = *start_x_[ra];
+    const auto& xb = *start_x_[rb];
     const SegmentPair sp = closest_points(xa[sa], xa[sa + 1], xb[sb], xb[sb + 1]);
     const double ra_ = rod_a.section().radius, rb_ = rod_b.section().radius;
     const Vec3 pa = xa[sa] + sp.s * (xa[sa + 1] - xa[sa]);
@@ -882,7 +820,7 @@ bool ContactSystem::pair_list_valid(const World& world) const {
     if (list_signature(rods[r]) != list_rods_[r]) return false;
   for (size_t k = 0; k < items_.size(); ++k) {
     const auto [r, s] = items_[k];
-    const auto& x = rods[r].positions();
+    const auto& x = *start_x_[r];
     const auto& x0 = list_positions_[r];
     const double moved = std::max((x[s] - x0[s]).cwiseAbs().maxCoeff(),
                                   (x[s + 1] - x0[s + 1]).cwiseAbs().maxCoeff());
@@ -904,7 +842,7 @@ void ContactSystem::build_pair_list(const World& world) {
   list_positions_.resize(rods.size());
   for (size_t r = 0; r < rods.size(); ++r) {
     list_rods_[r] = list_signature(rods[r]);
-    list_positions_[r] = rods[r].positions();
+    list_positions_[r] = *start_x_[r];
   }
   list_grow_ = grow_;
   list_skip_.resize(items_.size());

@@ -21,57 +21,46 @@ Rod& World::rod(const std::string& name) {
 
 const Rod& World::rod(const std::string& name) const { return const_cast<World*>(this)->rod(name); }
 
+// The stages in order; each names the file that holds it (docs/architecture.md).
 void World::step() {
+  // 1. Obstacle poses (contact/obstacle_motion.cpp): keyframed obstacles at t with the step's
+  // velocity, before the contacts see them.
   if (obstacles && !obstacle_motions.empty())
     move_obstacles(obstacle_motions, time_, time_step, obstacles.get());
-  if (is_implicit(integrator)) {
-    step_implicit();
-  } else if (!ContactSystem::needed(*this)) {
-    for (Rod& r : rods_) r.step(time_, time_step, gravity, integrator);
-  } else {
-    for (Rod& r : rods_) r.compute_forces(time_, gravity);
-    // A copy of a world (a snapshot) shares the system until it steps on its own.
-    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
-    contacts_->solve(*this, time_step);
-    for (Rod& r : rods_) r.integrate(time_, time_step, integrator);
-  }
+  Stepper& stepper = stepper_for(integrator);
+  // Only a world with something to collide has a contact stage: one without pays nothing.
+  const bool contacts = ContactSystem::needed(*this);
+  // 2. The free step of every rod (integrators/explicit_stepper.cpp, implicit_stepper.cpp).
+  stepper.free_step(*this, contacts, contacts ? contacts_.get() : nullptr);
+  // 3. Contacts (contact/contact.cpp): detected at the step's start, solved against the
+  // stepper's response to impulses.
+  if (contacts) own_contacts().solve(*this, time_step, stepper);
+  // 4. Commit: integration with the contact forces, drives, constraints, reactions, statistics.
+  stepper.commit(*this, contacts);
   time_ += time_step;
 }
 
-long World::implicit_factorisations() const {
-  long n = 0;
-  for (const ImplicitEuler& e : implicit_) n += e.factorisations();
-  return n;
+Stepper& World::stepper_for(Integrator i) {
+  switch (i) {
+    case Integrator::kImplicitEuler:
+    case Integrator::kBdf2:
+      implicit_.set_second_order(i == Integrator::kBdf2);
+      return implicit_;
+    case Integrator::kSemiImplicitEuler:
+    case Integrator::kSplitRotation:
+      break;
+  }
+  explicit_.set_rotation(i);
+  return explicit_;
 }
 
-void World::step_implicit() {
-  implicit_.resize(rods_.size());
-  implicit_results_.resize(rods_.size());
-  implicit_stats_ = ImplicitStats();
-  const bool contacts = ContactSystem::needed(*this);
-  for (size_t r = 0; r < rods_.size(); ++r) {
-    implicit_[r].set_options(implicit);
-    implicit_[r].set_second_order(integrator == Integrator::kBdf2);
-    // Contacts' impulses of the last step as the prediction (they change little between steps).
-    const int ri = static_cast<int>(r);
-    const bool have = contacts && contacts_;
-    implicit_results_[r] = implicit_[r].step(rods_[r], time_, time_step, gravity,
-                                             have ? contacts_->last_impulses(ri) : nullptr,
-                                             have ? contacts_->last_torque_impulses(ri) : nullptr);
-  }
-  if (contacts) {
-    if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
-    // It may take a rod's BDF2 step again as backward Euler (and replace its result).
-    contacts_->solve_implicit(*this, time_step, implicit_, &implicit_results_);
-  }
-  for (const ImplicitResult& res : implicit_results_) {
-    implicit_stats_.iterations = std::max(implicit_stats_.iterations, res.iterations);
-    if (!res.converged) ++implicit_stats_.unconverged;
-    if (res.reference > 0.0)
-      implicit_stats_.worst_residual =
-          std::max(implicit_stats_.worst_residual, res.residual / res.reference);
-  }
+ContactSystem& World::own_contacts() {
+  // A copy of a world (a snapshot) shares the system until it steps on its own.
+  if (!contacts_ || contacts_.use_count() > 1) contacts_ = std::make_shared<ContactSystem>();
+  return *contacts_;
 }
+
+long World::implicit_factorisations() const { return implicit_.factorisations(); }
 
 bool World::finite() const {
   for (const Rod& r : rods_)
