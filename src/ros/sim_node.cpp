@@ -180,7 +180,7 @@ void SimNode::step_once(corde::World* world) {
   const double h = world->time_step;  // the guard's, while it runs a halved step
   if (grasp_commands_.pending() > 0) grasp_commands_.replay(grasps_, *world, world->time(), h);
   if (!scripted_.empty()) drive_scripted(world, world->time(), h);
-  if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h);
+  if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h, holder_limits_);
   if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);
   world->step();
   if (!grasps_.empty()) grasps_.after_step(*world, h);

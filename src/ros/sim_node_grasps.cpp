@@ -120,10 +120,10 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);
-  grasps_.limits.max_speed = params_.holder_max_speed;
-  grasps_.limits.max_acceleration = params_.holder_max_acceleration;
-  grasps_.limits.max_angular_speed = params_.holder_max_angular_speed;
-  grasps_.limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  holder_limits_.max_speed = params_.holder_max_speed;
+  holder_limits_.max_acceleration = params_.holder_max_acceleration;
+  holder_limits_.max_angular_speed = params_.holder_max_angular_speed;
+  holder_limits_.max_angular_acceleration = params_.holder_max_angular_acceleration;
   for (const corde::GraspSpec& spec : initial_.grasps) {
     auto p = params_.grasps.find(spec.name);
     const GraspSource source = p == params_.grasps.end() ? GraspSource::kTopic : p->second.source;

@@ -204,6 +204,8 @@ class SimNode {
   InputQueue inputs_;
   corde::StepGuard guard_;
   corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
+  // Configuration (parameters, reconfigure): outside the guard's snapshot, never rolled back.
+  corde::HolderLimits holder_limits_;
   // Inputs applied since the guard's snapshot, applied again after a rollback.
   corde::GraspCommandLog grasp_commands_;
   corde::StepGuard::StepFn step_fn_;

@@ -383,7 +383,7 @@ TEST(StepGuard, GraspPullIsWorkNotGrowth) {
     StepGuard guard;
     guard.reset(w);
     const StepGuard::StepFn fn = [&](World* world) {
-      grasps.before_step(*world, world->time(), world->time_step);
+      grasps.before_step(*world, world->time(), world->time_step, HolderLimits());
       world->step();
       grasps.after_step(*world, world->time_step);
     };
@@ -425,7 +425,7 @@ TEST(StepGuard, RollbackKeepsTheInputsSinceTheSnapshot) {
     bool faulted = false;
     const StepGuard::StepFn fn = [&](World* world) {
       log.replay(grasps, *world, world->time(), world->time_step);
-      grasps.before_step(*world, world->time(), world->time_step);
+      grasps.before_step(*world, world->time(), world->time_step, HolderLimits());
       world->step();
       grasps.after_step(*world, world->time_step);
       if (!faulted && world->time() >= 0.01) {
