@@ -36,7 +36,6 @@
 #include "corde_sim/Step.h"
 #include "corde_sim/WorldState.h"
 #include "corde_sim/grasp/grasp.h"
-#include "corde_sim/grasp/grasp_commands.h"
 #include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_events.h"
@@ -46,6 +45,7 @@
 #include "corde_sim/ros/pacer.h"
 #include "corde_sim/ros/robot_obstacles.h"
 #include "corde_sim/scene/scene.h"
+#include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/step_guard.h"
 
 namespace corde_sim {
@@ -62,17 +62,11 @@ struct GraspWiring {
   int marker_id = 0;
   double last_input_time = -1.0;  // ROS time of the last pose input (s), for its interval
   // A scene grasp with keyframes (GraspSpec::motion), grasp_time or release_time is "scripted":
-  // it takes hold and lets go at those times and its holder follows the keyframes, in world time
-  // (World::time()), until the grasp's first input (a pose, its tf frame, ~grasp, ~release).
-  // `script` is the holder's motion since it took hold (null: none, or not held yet); it moves the
-  // held segment's pose from `script_start` (its pose when the grasp took hold), as corde_run
-  // does; the holder is that pose times `script_offset_inv` (the inverse of the grasp's offset
-  // then).
+  // the simulation driver takes hold and lets go at those times and moves its holder along the
+  // keyframes (corde::ScriptDrive::kHolder) until the grasp's first input (a pose, its tf frame,
+  // ~grasp, ~release). `scripted` mirrors the driver's state for the node's replies.
   bool scripted = false;
   corde::GraspSpec script_spec;
-  std::shared_ptr<const corde::Motion> script;
-  Eigen::Isometry3d script_start = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d script_offset_inv = Eigen::Isometry3d::Identity();
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
   ros::Publisher reaction_pub;
 };
@@ -105,14 +99,8 @@ class SimNode {
   void load_robot();
   void install_robot();
   void update_robot();
-  // Scripted grasps: takes hold or lets go when the step from t is the one nearest grasp_time or
-  // release_time (corde::grasp_holds(); the state is in the world and grasps_, so a guard's
-  // rollback and replay do it again), and sets each holder's goal to the keyframes' pose at t + h,
-  // reached at t + h (the holder limits still apply). Allocates nothing but when taking hold.
-  void drive_scripted(corde::World* world, double t, double h);
   // An input for grasp `name` arrived, or it was let go (`what`: "grasp '<name>' <what>"): its
-  // keyframes stop moving it (logged once, at INFO). The state then becomes the guard's state to
-  // go back to: its snapshot does not hold the scripted flags.
+  // keyframes stop moving it (logged once, at INFO); the state becomes the one to go back to.
   void end_script(const std::string& name, const char* what);
   // Whether grasp `name` is scripted, not held and its script will still take hold (before its
   // grasp_time, or unable to take hold yet): not one its script already let go.
@@ -168,12 +156,13 @@ class SimNode {
   // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
   // returns false while it has given up (the world then stays at its last good state).
   bool settle_guard();
+  // Reports the driver's events: the guard's (log, diagnostics) and the scripts' (layout).
   void report_guard_events();
   // A new world (start-up, reset, configure): the guard starts over from it. Returns what to add
   // to the service's message when the guard had given up before ("" otherwise).
   std::string restart_guard();
-  // One step of world_.time_step with the node's inputs (scripted and held grasps, robot links).
-  void step_once(corde::World* world);
+  // After each step (inside the guard): the contacts for rod_state and the diagnostics.
+  void watch_contacts(const corde::World& world);
   void publish_due(double now);
   void publish_reactions();
   void publish_tf();
@@ -196,19 +185,15 @@ class SimNode {
   NodeParams params_;
   std::string scene_path_;
   corde::Scene initial_;  // the scene as loaded, for ~reset
-  corde::World world_;
-  corde::GraspSet grasps_;
+  // The simulation driver: world, guard, grasps, scripts and the commands since the guard's
+  // snapshot (replayed after a rollback); the node feeds it and reads its state.
+  corde::Simulation sim_;
+  corde::World& world_ = sim_.world();
+  corde::GraspSet& grasps_ = sim_.grasps();
+  corde::StepGuard& guard_ = sim_.guard();
   std::map<std::string, GraspWiring> wiring_;
-  std::vector<std::pair<const std::string*, GraspWiring*>> scripted_;  // run_steps' list
   bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
   InputQueue inputs_;
-  corde::StepGuard guard_;
-  corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
-  // Configuration (parameters, reconfigure): outside the guard's snapshot, never rolled back.
-  corde::HolderLimits holder_limits_;
-  // Inputs applied since the guard's snapshot, applied again after a rollback.
-  corde::GraspCommandLog grasp_commands_;
-  corde::StepGuard::StepFn step_fn_;
   SimSettings settings_;
   int next_marker_id_ = 0;
 
@@ -230,8 +215,7 @@ class SimNode {
   double step_time_us_ = 0.0, measured_rtf_ = 0.0;
   bool lagging_ = false, rtf_initialised_ = false;
   int recoveries_ = 0, recoveries_reported_ = 0;  // guard detections (all recovered or not)
-  long guard_events_seen_ = 0;
-  std::string last_problem_;    // the guard's last event
+  std::string last_problem_;                      // the guard's last event
   std::string guard_note_;      // restart_guard()'s note from install_scene, for ~reset's reply
   std::string strain_warning_;  // rod strained beyond its max_strain (for diagnostics)
   double last_clock_ = -1.0, last_tf_time_ = -1.0;
