@@ -171,7 +171,18 @@ TEST(Simulation, QueueStaysBoundedWhileTimeStandsStill) {
     sim.submit(Command::twist_rate(sim.world().time(), "g", 0.1 * i));
   }
   EXPECT_EQ(sim.pending_commands(), 2u);  // the last goal and the last rate
+  // A goal of zero duration replaces every goal at its time; one of nonzero duration after it
+  // starts from it, so both stay.
+  for (int i = 0; i < 10; ++i) {
+    sim.submit(Command::goal(sim.world().time(), "g", pose, 0.0));
+    sim.submit(Command::goal(sim.world().time(), "g", pose, 0.01));
+  }
+  EXPECT_EQ(sim.pending_commands(), 3u);
+  // At another time they accumulate, as the steps need them.
+  sim.submit(Command::goal(sim.world().time() + 5 * kH, "g", pose, 0.01));
+  EXPECT_EQ(sim.pending_commands(), 4u);
   ASSERT_TRUE(sim.advance(1));
+  EXPECT_EQ(sim.pending_commands(), 1u);
   EXPECT_TRUE(sim.grasps().find("g")->holder.goal().isApprox(pose));
   EXPECT_EQ(sim.grasps().find("g")->twist_rate, 9.9);
 }
