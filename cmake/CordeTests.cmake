@@ -65,12 +65,28 @@ if(CATKIN_ENABLE_TESTING)
       target_compile_definitions(${_exe} PRIVATE CORDE_RUN_BINARY="$<TARGET_FILE:corde_run>")
     endif()
     set_target_properties(${_exe} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR})
-    # Run from the source root (config/ paths work).
+    # Run from the source root (config/ paths work). Suites whose tests share one expensive run
+    # (a function-local static) run as one ctest test, so that the run is computed once.
+    set(_shared)
+    if(kind STREQUAL "validation")
+      set(_shared OverhandKnot PlectonemeContact)
+    endif()
+    set(_filter "*")
+    if(_shared)
+      list(JOIN _shared ".*:" _joined)
+      set(_filter "-${_joined}.*")
+    endif()
     gtest_discover_tests(${_exe}
       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}
       DISCOVERY_TIMEOUT 60
       NO_PRETTY_VALUES
+      TEST_FILTER ${_filter}
       PROPERTIES LABELS ${kind})
+    foreach(_suite ${_shared})
+      add_test(NAME ${_suite}.all COMMAND ${_exe} --gtest_filter=${_suite}.*
+        WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+      set_tests_properties(${_suite}.all PROPERTIES LABELS ${kind})
+    endforeach()
     if(catkin_FOUND)
       set(_xml ${CATKIN_TEST_RESULTS_DIR}/${PROJECT_NAME}/gtest-${_exe}.xml)
       corde_catkin_run_tests(gtest_${_exe} ${_exe}

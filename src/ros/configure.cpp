@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/rod/rod_edit.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/stability/explicit_step_limit.h"
@@ -69,27 +70,15 @@ const std::vector<std::string>& configure_flags() {
   return flags;
 }
 
-std::string integrator_names() {
-  std::string out;
-  for (corde::Integrator i :
-       {corde::Integrator::kSemiImplicitEuler, corde::Integrator::kSplitRotation,
-        corde::Integrator::kImplicitEuler, corde::Integrator::kBdf2})
-    out += (out.empty() ? "" : ", ") + std::string(corde::integrator_name(i));
-  return out;
-}
+std::string integrator_names() { return corde::integrator_names_joined(); }
 
 double explicit_margin(const corde::World& world, std::string* limiting_rod) {
-  double margin = 0.0;
   limiting_rod->clear();
   if (corde::is_implicit(world.integrator)) return 0.0;
-  for (const corde::Rod& rod : world.rods()) {
-    const double m = world.time_step / corde::critical_time_step(rod);
-    if (!(m <= margin)) {  // NaN wins: it is reported, not hidden
-      margin = m;
-      *limiting_rod = rod.name();
-    }
-  }
-  return margin;
+  const corde::WorldStepLimit limit = corde::explicit_step_limit(world, false);
+  if (limit.rod < 0) return 0.0;
+  *limiting_rod = world.rods()[limit.rod].name();
+  return world.time_step / limit.time_step;  // NaN when the estimate is: reported, not hidden
 }
 
 SimSettings settings_from_world(const corde::World& world) {

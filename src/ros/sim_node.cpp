@@ -54,9 +54,17 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "node to publish /clock; stamps are that clock's time at start-up plus simulation "
         "time");
 
+  // The holder limits are the driver's configuration: kept across scene installs and rollbacks,
+  // changed by dynamic_reconfigure only (apply_reconfigure).
+  corde::HolderLimits holder_limits;
+  holder_limits.max_speed = params_.holder_max_speed;
+  holder_limits.max_acceleration = params_.holder_max_acceleration;
+  holder_limits.max_angular_speed = params_.holder_max_angular_speed;
+  holder_limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  sim_.set_holder_limits(holder_limits);
   corde::GuardSettings guard_settings;
-  guard_settings.max_speed = params_.max_node_speed;
-  guard_settings.max_angular_speed = params_.max_angular_speed;
+  guard_settings.limits.max_speed = params_.max_node_speed;
+  guard_settings.limits.max_angular_speed = params_.max_angular_speed;
   guard_.set_settings(guard_settings);
   sim_.set_obstacle_mover([this](corde::World* w, double h) {
     if (!robot_.empty()) robot_.before_step(w->obstacles.get(), h);
@@ -85,14 +93,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   // tf input: own subscriptions so that this node's own (large) /tf messages are skipped
   // without being stored; everything else goes into the buffer.
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-  tf_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf", 100,
-      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
-          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, false); }));
-  tf_static_sub_ = nh_.subscribe<tf2_msgs::TFMessage>(
-      "/tf_static", 100,
-      boost::function<void(const ros::MessageEvent<tf2_msgs::TFMessage const>&)>(
-          [this](const ros::MessageEvent<tf2_msgs::TFMessage const>& ev) { on_tf(ev, true); }));
+  tf_input_ = std::make_unique<TfInput>(nh_, tf_buffer_.get());
 
   // A listener that connects while the simulation is paused would otherwise see no frames until
   // it resumes (frames are sent once per stamp): it alone gets the current ones.
@@ -107,32 +108,40 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   std::string error = install_scene(std::move(scene), params_.scene);
   if (!error.empty()) throw std::invalid_argument("parameter ~scene: " + error);
 
-  services_.push_back(pnh_.advertiseService("reset", &SimNode::on_reset, this));
-  services_.push_back(pnh_.advertiseService("configure", &SimNode::on_configure, this));
-  services_.push_back(pnh_.advertiseService("pause", &SimNode::on_pause, this));
-  services_.push_back(pnh_.advertiseService("step", &SimNode::on_step, this));
-  services_.push_back(pnh_.advertiseService("grasp", &SimNode::on_grasp, this));
-  services_.push_back(pnh_.advertiseService("release", &SimNode::on_release, this));
-  services_.push_back(pnh_.advertiseService("list_grasps", &SimNode::on_list_grasps, this));
+  // Services on their own queue, served by their own threads (command_queue.h), started last.
+  services_ = std::make_unique<ServiceThreads>(pnh_);
+  services_->advertise("reset", &SimNode::on_reset, this);
+  services_->advertise("configure", &SimNode::on_configure, this);
+  services_->advertise("pause", &SimNode::on_pause, this);
+  services_->advertise("step", &SimNode::on_step, this);
+  services_->advertise("grasp", &SimNode::on_grasp, this);
+  services_->advertise("release", &SimNode::on_release, this);
+  services_->advertise("list_grasps", &SimNode::on_list_grasps, this);
+  // A command queued from another thread wakes the loop at once (it waits on the global queue).
+  commands_.set_wake([] {
+    class Wake : public ros::CallbackInterface {
+     public:
+      CallResult call() override { return Success; }
+    };
+    ros::getGlobalCallbackQueue()->addCallback(boost::make_shared<Wake>());
+  });
 
-  // dynamic_reconfigure starts from the parameters as read (it calls on_reconfigure at once, in
-  // this thread); later requests are served by its own thread.
-  reconfigure_accepted_.real_time_factor = params_.real_time_factor;
-  reconfigure_accepted_.tf_rate = params_.tf_rate;
-  reconfigure_accepted_.marker_rate = params_.marker_rate;
-  reconfigure_accepted_.state_rate = params_.state_rate;
-  reconfigure_accepted_.marker_style =
+  // dynamic_reconfigure starts from the parameters as read (its first request, made in this
+  // thread, is queued and applied here below); later requests are served by its own thread.
+  NodeConfig initial;
+  initial.real_time_factor = params_.real_time_factor;
+  initial.tf_rate = params_.tf_rate;
+  initial.marker_rate = params_.marker_rate;
+  initial.state_rate = params_.state_rate;
+  initial.marker_style =
       params_.marker_style == MarkerStyle::kLineStrip ? "line_strip" : "cylinders";
-  reconfigure_accepted_.marker_min_diameter = params_.marker_min_diameter;
-  reconfigure_accepted_.holder_max_speed = params_.holder_max_speed;
-  reconfigure_accepted_.holder_max_acceleration = params_.holder_max_acceleration;
-  ros::NodeHandle reconfigure_nh(pnh_);
-  reconfigure_nh.setCallbackQueue(&reconfigure_queue_);
-  reconfigure_ = std::make_unique<dynamic_reconfigure::Server<NodeConfig>>(reconfigure_nh);
-  reconfigure_->setCallback([this](NodeConfig& c, uint32_t level) { on_reconfigure(c, level); });
-  apply_reconfigure();
-  reconfigure_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &reconfigure_queue_);
-  reconfigure_spinner_->start();
+  initial.marker_min_diameter = params_.marker_min_diameter;
+  initial.holder_max_speed = params_.holder_max_speed;
+  initial.holder_max_acceleration = params_.holder_max_acceleration;
+  reconfigure_ =
+      std::make_unique<ReconfigureInput>(pnh_, initial, &commands_, &loop_running_,
+                                         [this](const NodeConfig& c) { apply_reconfigure(c); });
+  drain_commands();
 
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
   diagnostics_->setHardwareID("corde_sim");
@@ -140,12 +149,48 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
 
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
   paused_ = params_.start_paused;
+  // Two threads: a ~reset reading a long scene file does not hold a ~pause or ~list_grasps.
+  services_->start(2);
   ROS_INFO(
       "corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), integrator %s, time step %g s, "
       "%s%s",
       initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(),
       corde::integrator_name(world_.integrator), world_.time_step, margin_text().c_str(),
       paused_ ? ", paused" : "");
+}
+
+SimNode::~SimNode() {
+  close_commands();
+  if (services_) services_->stop();
+  reconfigure_.reset();
+}
+
+void SimNode::close_commands() {
+  // Waiting callers return (their commands are not applied), so that their threads can stop.
+  loop_running_ = false;
+  commands_.close();
+  if (step_call_) {
+    step_call_->res->success = false;
+    step_call_->res->message = "the node is shutting down";
+    step_call_->reply->set();
+    step_call_.reset();
+  }
+}
+
+void SimNode::drain_commands() {
+  for (CommandQueue::Command& c : commands_.take()) {
+    if (c.is_input)
+      apply_input(c.input);
+    else
+      c.apply(c.reply);
+  }
+}
+
+bool SimNode::in_loop(const std::function<void()>& fn) {
+  return commands_.call([&fn](const ReplyPtr& reply) {
+    fn();
+    reply->set();
+  });
 }
 
 ros::Time SimNode::stamp() const {
@@ -211,7 +256,6 @@ long SimNode::run_steps(long n, double deadline) {
 }
 
 void SimNode::advance(double now) {
-  apply_inputs();
   if (guard_.failed()) {
     // Stopped at the last good state: the clock goes on (tf and /clock listeners see the state
     // held, not a frozen time) and the state is published as it is until a reset or configure.
@@ -237,7 +281,6 @@ void SimNode::advance(double now) {
 }
 
 void SimNode::run_queued_steps(double now) {
-  apply_inputs();
   if (guard_.failed()) {
     queued_steps_ = 0;
     return;
@@ -256,7 +299,8 @@ void SimNode::run_queued_steps(double now) {
     queued_steps_ = 0;
   }
   refresh_if_grasps_changed();
-  if (queued_steps_ == 0) ROS_INFO("corde_sim: queued ~step steps done at t = %.6f s", sim_time());
+  if (queued_steps_ == 0 && !step_call_)  // (a call still waiting says so in its reply)
+    ROS_INFO("corde_sim: queued ~step steps done at t = %.6f s", sim_time());
 }
 
 void SimNode::refresh_if_grasps_changed() {
@@ -489,8 +533,8 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("real-time factor (measured)", measured_rtf_);
   stat.add("real-time factor (target, 0 = max)", target);
   stat.add("substeps per loop", steps_last_iteration_);
-  stat.add("queued steps", queued_steps_);    // ~step's, run while paused
-  stat.add("queued inputs", inputs_.size());  // at most one per grasp and kind
+  stat.add("queued steps", queued_steps_);        // ~step's, run while paused
+  stat.add("queued inputs", commands_.inputs());  // at most one per grasp and kind
   stat.add("stability margin h/h_crit", stability_margin_);
   stat.add("stability limiting rod", limiting_rod_);
   stat.add("rods", world_.rods().size());
@@ -540,17 +584,21 @@ int SimNode::run() {
   const double bench_end =
       params_.benchmark > 0.0 ? now + params_.benchmark : std::numeric_limits<double>::infinity();
   double output_wall_total = 0.0, output_wall_max = 0.0;
+  loop_running_ = true;
   while (ros::ok()) {
+    // Inputs: topic callbacks and tf-followed frames queue theirs; then every command waiting
+    // (inputs, services, reconfigure) is applied, oldest first, before the steps.
     queue->callAvailable(ros::WallDuration(0));
-    apply_reconfigure();
     update_tf_holders();
     update_robot();
+    drain_commands();
     now = wall_seconds();
     if (!paused_)
       advance(now);
     else if (queued_steps_ > 0)
       run_queued_steps(now);
     now = wall_seconds();
+    if (step_call_) answer_step_call(now);
     publish_due(now);
     diagnostics_->update();
     if (params_.status_period > 0.0 && now >= next_status_) {
@@ -570,6 +618,7 @@ int SimNode::run() {
       wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
   }
+  close_commands();
   if (params_.benchmark > 0.0) {
     ROS_INFO(
         "corde_sim benchmark: outputs (tf, markers, state, clock, diagnostics) took %.3f s "

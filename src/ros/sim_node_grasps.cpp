@@ -1,6 +1,7 @@
 // SimNode: scenes, grasps and their inputs (pose, wrench and twist-rate topics, tf frames).
-// Callbacks check a message and queue it as an InputEvent; apply_inputs() hands the queue to the
-// library's GraspSet at the start of the next batch of steps.
+// Callbacks check a message and queue it as an InputEvent (command_queue.h); the loop applies it
+// (apply_input) before its next batch of steps, as a time-stamped command of the simulation
+// driver (corde::Simulation::submit), which takes effect at the start of the next step.
 #include <ros/package.h>
 #include <sys/stat.h>
 
@@ -28,18 +29,6 @@ bool valid_name(const std::string& s) {
 bool file_exists(const std::string& path) {
   struct stat st;
   return stat(path.c_str(), &st) == 0;
-}
-
-// Queues an input; an input of the same kind for the same grasp waiting since the last batch is
-// replaced (poses only by a newer one): the queue holds at most three inputs per grasp, however
-// many arrive while the simulation is paused or busy.
-void queue_input(InputQueue* queue, InputEvent e) {
-  for (InputEvent& old : *queue) {
-    if (old.kind != e.kind || old.grasp != e.grasp) continue;
-    if (e.kind != InputEvent::Kind::kPose || e.input_time >= old.input_time) old = std::move(e);
-    return;
-  }
-  queue->push_back(std::move(e));
 }
 
 // First pose input of a grasp: the holder's reference glides there over this long instead of
@@ -112,18 +101,11 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
     if (kept) it->second.scripted = false;  // add_grasp starts its script again
     it = kept ? std::next(it) : wiring_.erase(it);
   }
-  inputs_.clear();
-  sim_.install(scene.world);  // no grasps, scripts or commands
+  sim_.install(scene.world);  // no grasps, scripts or commands; the holder limits stay
   install_robot();            // the robot's links join the new world's obstacles
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);
-  corde::HolderLimits limits;
-  limits.max_speed = params_.holder_max_speed;
-  limits.max_acceleration = params_.holder_max_acceleration;
-  limits.max_angular_speed = params_.holder_max_angular_speed;
-  limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
-  sim_.set_holder_limits(limits);
   for (const corde::GraspSpec& spec : initial_.grasps) {
     auto p = params_.grasps.find(spec.name);
     const GraspSource source = p == params_.grasps.end() ? GraspSource::kTopic : p->second.source;
@@ -386,20 +368,6 @@ std::string SimNode::check_workspace(const Eigen::Vector3d& p) const {
          "] m (~workspace_min, ~workspace_max)";
 }
 
-void SimNode::on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static) {
-  if (ev.getPublisherName() == ros::this_node::getName()) return;  // our own rods
-  const std::string authority = ev.getPublisherName();
-  for (const geometry_msgs::TransformStamped& t : ev.getMessage()->transforms) {
-    try {
-      tf_buffer_->setTransform(t, authority, is_static);
-    } catch (const std::exception& e) {
-      // (tf2's message quotes the frame ids, which may be of any length)
-      ROS_WARN_THROTTLE(5.0, "corde_sim: ignoring a transform from %s: %s", authority.c_str(),
-                        clip_reply(e.what()).c_str());
-    }
-  }
-}
-
 double SimNode::ros_to_sim_interval(double ros_seconds) const {
   // Input stamps are ROS time: simulation time itself when this node publishes /clock, wall
   // time otherwise, which the simulation follows at the real-time factor.
@@ -439,18 +407,12 @@ void SimNode::update_tf_holders() {
                         w.frame.c_str(), error.c_str());
       continue;
     }
-    if (w.scripted)
-      end_script(kv.first, ("follows tf frame '" + w.frame + "' from now on").c_str());
-    if (!w.attached) {
-      grasps_.attach(world_, kv.first, f, w.snap ? &w.offset : nullptr, world_.time());
-      guard_.mark_good(world_);  // a rollback goes back to the attached grasp, not to before it
-      w.attached = true;
-      ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", kv.first.c_str(), w.frame.c_str());
-    } else {
-      const double interval = w.last_input_time < 0.0 ? 0.0 : stamp - w.last_input_time;
-      sim_.submit(corde::Command::goal(world_.time(), kv.first, f, ros_to_sim_interval(interval)));
-    }
-    w.last_input_time = stamp;
+    InputEvent e;
+    e.kind = InputEvent::Kind::kFrame;
+    e.grasp = kv.first;
+    e.pose = f;
+    e.input_time = stamp;
+    commands_.push_input(std::move(e));
   }
 }
 
@@ -495,7 +457,7 @@ void SimNode::on_pose(const std::string& name, const geometry_msgs::PoseStampedC
     return;
   }
   e.input_time = zero ? now.toSec() : msg->header.stamp.toSec();
-  queue_input(&inputs_, std::move(e));
+  commands_.push_input(std::move(e));
 }
 
 void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg) {
@@ -520,7 +482,7 @@ void SimNode::on_wrench(const std::string& name, const geometry_msgs::WrenchStam
   // Free vectors: only the rotation applies.
   e.force = to_world.linear() * f;
   e.torque = to_world.linear() * tau;
-  queue_input(&inputs_, std::move(e));
+  commands_.push_input(std::move(e));
 }
 
 void SimNode::on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg) {
@@ -541,47 +503,64 @@ void SimNode::on_twist_rate(const std::string& name, const std_msgs::Float64Cons
   e.kind = InputEvent::Kind::kTwistRate;
   e.grasp = name;
   e.rate = msg->data;
-  queue_input(&inputs_, std::move(e));
+  commands_.push_input(std::move(e));
 }
 
-void SimNode::apply_inputs() {
-  for (const InputEvent& e : inputs_) {
-    auto w = wiring_.find(e.grasp);
-    if (w == wiring_.end()) continue;  // the scene was replaced since
-    switch (e.kind) {
-      case InputEvent::Kind::kPose: {
-        const corde::GraspState* g = grasps_.find(e.grasp);
-        if (!g || !g->held) {
-          // Let go since the pose was queued: it would move nothing, and must not end a script
-          // that still takes hold later.
-          ROS_WARN_THROTTLE(2.0, "corde_sim: pose for grasp '%s' ignored: it is not held",
-                            e.grasp.c_str());
-          break;
-        }
-        double& last = w->second.last_input_time;
-        if (last >= 0.0 && e.input_time < last) {
-          ROS_WARN_THROTTLE(1.0,
-                            "corde_sim: pose for grasp '%s' rejected: stamp older than the "
-                            "previous pose",
-                            e.grasp.c_str());
-          break;
-        }
-        const double interval =
-            last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
-        last = e.input_time;
-        if (w->second.scripted) end_script(e.grasp, "follows its pose input from now on");
-        sim_.submit(corde::Command::goal(world_.time(), e.grasp, e.pose, interval));
+void SimNode::apply_input(const InputEvent& e) {
+  auto w = wiring_.find(e.grasp);
+  if (w == wiring_.end()) return;  // the scene was replaced since
+  switch (e.kind) {
+    case InputEvent::Kind::kPose: {
+      const corde::GraspState* g = grasps_.find(e.grasp);
+      if (!g || !g->held) {
+        // Let go since the pose was queued: it would move nothing, and must not end a script
+        // that still takes hold later.
+        ROS_WARN_THROTTLE(2.0, "corde_sim: pose for grasp '%s' ignored: it is not held",
+                          e.grasp.c_str());
         break;
       }
-      case InputEvent::Kind::kWrench:
-        sim_.submit(corde::Command::wrench(world_.time(), e.grasp, e.force, e.torque));
+      double& last = w->second.last_input_time;
+      if (last >= 0.0 && e.input_time < last) {
+        ROS_WARN_THROTTLE(1.0,
+                          "corde_sim: pose for grasp '%s' rejected: stamp older than the "
+                          "previous pose",
+                          e.grasp.c_str());
         break;
-      case InputEvent::Kind::kTwistRate:
-        sim_.submit(corde::Command::twist_rate(world_.time(), e.grasp, e.rate));
-        break;
+      }
+      const double interval =
+          last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
+      last = e.input_time;
+      if (w->second.scripted) end_script(e.grasp, "follows its pose input from now on");
+      sim_.submit(corde::Command::goal(world_.time(), e.grasp, e.pose, interval));
+      break;
     }
+    case InputEvent::Kind::kFrame: {
+      GraspWiring& wr = w->second;
+      const corde::GraspState* g = grasps_.find(e.grasp);
+      if (wr.source != GraspSource::kTf || !g || !g->held || e.input_time <= wr.last_input_time)
+        break;
+      if (wr.scripted)
+        end_script(e.grasp, ("follows tf frame '" + wr.frame + "' from now on").c_str());
+      if (!wr.attached) {
+        grasps_.attach(world_, e.grasp, e.pose, wr.snap ? &wr.offset : nullptr, world_.time());
+        sim_.mark_good();  // a rollback goes back to the attached grasp, not before it
+        wr.attached = true;
+        ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", e.grasp.c_str(), wr.frame.c_str());
+      } else {
+        const double interval = wr.last_input_time < 0.0 ? 0.0 : e.input_time - wr.last_input_time;
+        sim_.submit(
+            corde::Command::goal(world_.time(), e.grasp, e.pose, ros_to_sim_interval(interval)));
+      }
+      wr.last_input_time = e.input_time;
+      break;
+    }
+    case InputEvent::Kind::kWrench:
+      sim_.submit(corde::Command::wrench(world_.time(), e.grasp, e.force, e.torque));
+      break;
+    case InputEvent::Kind::kTwistRate:
+      sim_.submit(corde::Command::twist_rate(world_.time(), e.grasp, e.rate));
+      break;
   }
-  inputs_.clear();
 }
 
 void SimNode::check_holders_and_strain() {
@@ -622,7 +601,7 @@ void SimNode::check_holders_and_strain() {
       end_script(nearest, "slipped");
       // As a release by service: a rollback must not hold the segment again (grasps_ goes back
       // with the world), the node having said that it slipped.
-      guard_.mark_good(world_);
+      sim_.mark_good();
       ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
                strain_warning_.c_str());
       refresh_layout();

@@ -1,4 +1,5 @@
-// SimNode: the private services (reset, configure, pause, step, grasp, release).
+// SimNode: the private services (reset, configure, pause, step, grasp, release). Each callback
+// runs on a service thread and waits for its command to be applied by the loop (command_queue.h).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,12 +36,15 @@ std::string clip_all(std::string text, const std::string& input) {
   return text;
 }
 
-}  // namespace
-
-std::string SimNode::check_step_cost(const corde::World& candidate) const {
+// "" or why a world whose steps cost more than kMaxStepSeconds of wall time cannot be run:
+// estimated from `current` (a copy of the world running now, whose steps took step_time_us) per
+// element first (a hopeless request costs nothing), then measured by one step of a copy. Runs on
+// a service thread: the trial steps never hold the loop.
+std::string check_step_cost(const corde::World& candidate, const corde::World& current,
+                            double step_time_us) {
   // A scene started with slower steps (start-up is not checked) may be reset and configured at
   // up to twice its measured cost.
-  const double allowed = std::max(kMaxStepSeconds, 2e-6 * step_time_us_);
+  const double allowed = std::max(kMaxStepSeconds, 2e-6 * step_time_us);
   const std::string limit = "more than the " + num(allowed) +
                             " s per step the node allows (it serves its outputs between steps)";
   // More elements: first a rough estimate from a step of the world running now with the
@@ -49,9 +53,9 @@ std::string SimNode::check_step_cost(const corde::World& candidate) const {
   // implicit_euler in about 0.1 s at 8000 elements, 8 s at 100000). Ten times the limit refuses a
   // hopeless request without stepping it (the trial step below could take seconds); below that
   // the trial step decides.
-  const long before = std::max(1L, total_elements(world_)), after = total_elements(candidate);
+  const long before = std::max(1L, total_elements(current)), after = total_elements(candidate);
   if (after > before) {
-    corde::World probe = world_;
+    corde::World probe = current;
     probe.integrator = candidate.integrator;
     probe.time_step = candidate.time_step;
     const double now = trial_step_seconds(probe);
@@ -69,6 +73,28 @@ std::string SimNode::check_step_cost(const corde::World& candidate) const {
   return "";
 }
 
+// A copy of a world that another thread steps gets an obstacle set of its own (the obstacles
+// copied, their meshes shared): a step poses the keyframed obstacles in its set.
+void own_obstacles(corde::World* world) {
+  if (!world->obstacles) return;
+  auto set = std::make_shared<corde::ObstacleSet>();
+  for (int i = 0; i < world->obstacles->size(); ++i) set->add(world->obstacles->obstacle(i));
+  world->obstacles = set;
+}
+
+// What a service thread needs of the running simulation for its checks (copied in the loop).
+struct RunningCopy {
+  corde::World world;
+  double step_time_us = 0.0;
+  std::string stopped_note, scene_path;
+};
+
+constexpr const char* kQueuedNote =
+    "; they run while paused, in batches with rod_state and tf between them (unpausing or ~reset "
+    "drops them)";
+
+}  // namespace
+
 std::string SimNode::stopped_note() const {
   return guard_.failed() ? "; the simulation is still stopped at its last good state (stability "
                            "guard: " +
@@ -78,27 +104,40 @@ std::string SimNode::stopped_note() const {
 
 bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
   reset(req, res);
-  if (!res.success) res.message += stopped_note();
   res.message = clip_reply(res.message);
   return true;
 }
 
 bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
   configure(req, res);
-  if (!res.success) res.message += stopped_note();
   res.message = clip_reply(res.message);
   return true;
 }
 
 void SimNode::reset(Reset::Request& req, Reset::Response& res) {
-  std::string path = scene_path_;
+  // On this thread: finding, reading and checking the scene (its statics and automatic choices
+  // included) and a trial step. The loop installs it in one go (install_scene).
+  RunningCopy now;
+  if (!in_loop([&] {
+        now.world = world_;
+        own_obstacles(&now.world);
+        now.step_time_us = step_time_us_;
+        now.stopped_note = stopped_note();
+        now.scene_path = scene_path_;
+      })) {
+    res.success = false;
+    res.message = "the node is shutting down";
+    return;
+  }
+  res.success = false;
+  std::string path = now.scene_path;
   if (!req.scene.empty()) {
     std::string error;
     path = req.scene.size() > 4096 ? "" : resolve_scene(req.scene, &error);
     if (path.empty()) {
-      res.success = false;
       res.message = "scene not loaded, state unchanged: " +
-                    (error.empty() ? "scene path '" + clip(req.scene) + "' is too long" : error);
+                    (error.empty() ? "scene path '" + clip(req.scene) + "' is too long" : error) +
+                    now.stopped_note;
       return;
     }
   }
@@ -106,9 +145,8 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   const std::string unusable =
       corde::check_input_file(path, "scene file", corde::SceneLimits::max_file_bytes);
   if (!unusable.empty()) {
-    res.success = false;
     res.message = "scene not loaded, state unchanged: " + clip(path) +
-                  unusable.substr(std::min(path.size(), unusable.size()));
+                  unusable.substr(std::min(path.size(), unusable.size())) + now.stopped_note;
     return;
   }
   corde::Scene scene;
@@ -117,107 +155,143 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
     scene = path == params_.scene ? corde::load_scene(path, params_.overrides)
                                   : corde::load_scene(path);
   } catch (const std::exception& e) {
-    res.success = false;
-    res.message = "scene not loaded, state unchanged: " + clip_all(e.what(), path);
+    res.message =
+        "scene not loaded, state unchanged: " + clip_all(e.what(), path) + now.stopped_note;
     return;
   }
-  // The new world starts at its own time 0; the node's clock continues from where it was.
-  const std::string cost = check_step_cost(scene.world);
+  const std::string cost = check_step_cost(scene.world, now.world, now.step_time_us);
   if (!cost.empty()) {
-    res.success = false;
-    res.message = "scene not used, state unchanged: " + cost;
+    res.message = "scene not used, state unchanged: " + cost + now.stopped_note;
     return;
   }
-  const double t = sim_time();
-  const std::string error = install_scene(std::move(scene), path);
-  if (!error.empty()) {
-    res.success = false;
-    res.message = "scene not used, state unchanged: " + error;
-    return;
-  }
-  time_offset_ = t;
-  bump_time();
-  pacer_.anchor(sim_time(), wall_seconds());
-  res.success = true;
-  res.message = "reset to '" + clip(path) + "' at t = " + num(sim_time()) + " s" + guard_note_;
-  guard_note_.clear();
-  if (queued_steps_ > 0) {
-    res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
-    queued_steps_ = 0;
-  }
-  ROS_INFO("corde_sim: %s", res.message.c_str());
-  return;
+  if (!in_loop([&] {
+        // The new world starts at its own time 0; the node's clock continues from where it was.
+        const double t = sim_time();
+        const std::string error = install_scene(std::move(scene), path);
+        if (!error.empty()) {
+          res.message = "scene not used, state unchanged: " + error + stopped_note();
+          return;
+        }
+        time_offset_ = t;
+        bump_time();
+        pacer_.anchor(sim_time(), wall_seconds());
+        res.success = true;
+        res.message =
+            "reset to '" + clip(path) + "' at t = " + num(sim_time()) + " s" + guard_note_;
+        guard_note_.clear();
+        if (queued_steps_ > 0) {
+          res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
+          queued_steps_ = 0;
+        }
+        ROS_INFO("corde_sim: %s", res.message.c_str());
+      }))
+    res.message = "the node is shutting down";
 }
 
-void SimNode::configure(Configure::Request& req, Configure::Response& res) {
+std::string SimNode::configured_copy(const Configure::Request& req, corde::World* world,
+                                     SimSettings* settings, std::vector<std::string>* resample,
+                                     std::string* summary) const {
   ConfigurePlan plan;
-  std::string error = plan_configure(
+  const std::string error = plan_configure(
       world_, req.rod, req.keys, req.values, req.flags,
       std::vector<bool>(req.flag_values.begin(), req.flag_values.end()), req.integrator, &plan);
-  if (!error.empty()) {
-    res.success = false;
-    res.message = error;
-    return;
-  }
-  // Work on copies; keep them only if everything succeeds.
-  corde::World world = world_;
-  SimSettings settings = settings_;
-  const double margin_before = stability_margin_;
-  std::string summary;
+  if (!error.empty()) return error;
+  *world = world_;
+  *settings = settings_;
   try {
     // A resampled rod loses its segment indices: take the grasps' drives off first, re-grasp
     // after (GraspSet::remake_on).
     for (const auto& kv : grasps_.grasps())
       if (kv.second.held && std::find(plan.resample.begin(), plan.resample.end(),
                                       kv.second.grasp.rod) != plan.resample.end())
-        corde::release(world.rods()[kv.second.rod], kv.second.grasp);
-    summary = apply_configure(plan, &world, &settings);
+        corde::release(world->rods()[kv.second.rod], kv.second.grasp);
+    *summary = apply_configure(plan, world, settings);
   } catch (const std::exception& e) {
-    res.success = false;
-    res.message = std::string("rejected, nothing changed: ") + e.what();
-    return;
+    return std::string("rejected, nothing changed: ") + e.what();
   }
   // An explicit integrator must stay within its stability limit (or within the margin the scene
   // already ran at); the implicit one has none to check.
   std::string limiting;
-  const double margin = explicit_margin(world, &limiting);
-  if (!std::isfinite(margin) || margin > std::max(1.0, margin_before)) {
-    res.success = false;
-    res.message = "rejected, nothing changed: time_step " + num(world.time_step) +
-                  " s would exceed the stability limit of rod '" + limiting + "' for " +
-                  corde::integrator_name(world.integrator) + " (h/h_crit " + num(margin) +
-                  "); give a smaller time_step in the same request, or integrator implicit_euler";
+  const double margin = explicit_margin(*world, &limiting);
+  if (!std::isfinite(margin) || margin > std::max(1.0, stability_margin_))
+    return "rejected, nothing changed: time_step " + num(world->time_step) +
+           " s would exceed the stability limit of rod '" + limiting + "' for " +
+           corde::integrator_name(world->integrator) + " (h/h_crit " + num(margin) +
+           "); give a smaller time_step in the same request, or integrator implicit_euler";
+  *resample = plan.resample;
+  return "";
+}
+
+void SimNode::configure(Configure::Request& req, Configure::Response& res) {
+  // The loop applies the request to a copy of the world; this thread times a step of it; the loop
+  // then applies it again to the world as it is by then (it may have run on) and installs that.
+  corde::World world;
+  SimSettings settings;
+  std::vector<std::string> resample;
+  std::string summary, error;
+  RunningCopy now;
+  res.success = false;
+  if (!in_loop([&] {
+        error = configured_copy(req, &world, &settings, &resample, &summary);
+        if (!error.empty()) error += stopped_note();
+        if (error.empty()) {
+          own_obstacles(&world);
+          now.world = world_;
+          own_obstacles(&now.world);
+        }
+        now.step_time_us = step_time_us_;
+        now.stopped_note = stopped_note();
+      })) {
+    res.message = "the node is shutting down";
     return;
   }
-  const std::string cost = check_step_cost(world);
+  if (!error.empty()) {
+    res.message = error;
+    return;
+  }
+  const std::string cost = check_step_cost(world, now.world, now.step_time_us);
   if (!cost.empty()) {
-    res.success = false;
     std::string asked;
     for (size_t i = 0; i < req.keys.size(); ++i)
       asked += (asked.empty() ? "" : ", ") + req.keys[i] + " " + num(req.values[i]);
-    res.message = "rejected, nothing changed (" + asked + "): " + cost;
+    res.message = "rejected, nothing changed (" + asked + "): " + cost + now.stopped_note;
     return;
   }
-  std::swap(world_, world);
-  settings_ = settings;
-  for (const std::string& rod : plan.resample)
-    for (size_t i = 0; i < world_.rods().size(); ++i)
-      if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
-  const std::string note = restart_guard();
-  bump_time();
-  refresh_layout();
-  res.success = true;
-  res.message = "configured " +
-                (req.rod.empty() ? std::string("all rods") : "rod '" + clip(req.rod) + "'") + ": " +
-                summary + "(" + corde::integrator_name(world_.integrator) +
-                (corde::is_implicit(world_.integrator) ? std::string(", no explicit step limit")
-                                                       : ", h/h_crit " + num(stability_margin_)) +
-                ")" + note;
-  ROS_INFO("corde_sim: %s", res.message.c_str());
-  return;
+  const bool applied = in_loop([&] {
+    error = configured_copy(req, &world, &settings, &resample, &summary);
+    if (!error.empty()) {
+      res.message = error + stopped_note();
+      return;
+    }
+    std::swap(world_, world);
+    settings_ = settings;
+    for (const std::string& rod : resample)
+      for (size_t i = 0; i < world_.rods().size(); ++i)
+        if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
+    const std::string note = restart_guard();
+    bump_time();
+    refresh_layout();
+    res.success = true;
+    res.message = "configured " +
+                  (req.rod.empty() ? std::string("all rods") : "rod '" + clip(req.rod) + "'") +
+                  ": " + summary + "(" + corde::integrator_name(world_.integrator) +
+                  (corde::is_implicit(world_.integrator) ? std::string(", no explicit step limit")
+                                                         : ", h/h_crit " + num(stability_margin_)) +
+                  ")" + note;
+    ROS_INFO("corde_sim: %s", res.message.c_str());
+  });
+  if (!applied) res.message = "the node is shutting down";
 }
 
 bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+  if (!in_loop([&] { pause(req, res); })) {
+    res.success = false;
+    res.message = "the node is shutting down";
+  }
+  return true;
+}
+
+void SimNode::pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
   if (paused_ != static_cast<bool>(req.data)) {
     paused_ = req.data;
     if (!paused_) pacer_.anchor(sim_time(), wall_seconds());  // no backlog from the pause
@@ -228,71 +302,83 @@ bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Respo
     res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
     queued_steps_ = 0;
   }
-  return true;
 }
 
 bool SimNode::on_step(Step::Request& req, Step::Response& res) {
-  res.time = sim_time();
-  if (!paused_) {
+  // The loop answers once the steps are run (or after kStepCallSeconds, the rest queued).
+  if (!commands_.call([&](const ReplyPtr& reply) { start_step_call(req, &res, reply); })) {
     res.success = false;
-    res.message = "not paused: call ~pause with data: true first";
-    return true;
+    res.message = "the node is shutting down";
   }
-  if (req.steps < 1 || req.steps > 10000000) {
-    res.success = false;
-    res.message = "steps must be in [1, 10000000], got " + std::to_string(req.steps);
-    return true;
-  }
-  if (queued_steps_ + req.steps > kMaxQueuedSteps) {
-    res.success = false;
-    res.message = std::to_string(queued_steps_) + " step(s) are still queued; at most " +
-                  std::to_string(kMaxQueuedSteps) + " may wait";
-    return true;
-  }
-  const std::string queued_note =
-      "; they run while paused, in batches with rod_state and tf between them (unpausing or "
-      "~reset drops them)";
-  if (queued_steps_ > 0) {  // after the ones waiting
-    queued_steps_ += req.steps;
-    res.success = true;
-    res.message = "queued " + std::to_string(req.steps) + " step(s) behind " +
-                  std::to_string(queued_steps_ - req.steps) + " still queued" + queued_note;
-    return true;
-  }
-  update_tf_holders();
-  apply_inputs();
-  const int detections = recoveries_;
-  // The steps run in the call for up to kStepCallSeconds, in slices with the outputs between
-  // (they keep their rate); res.time is after them. The rest is queued, so that a large request
-  // neither silences the outputs nor holds the callbacks.
-  const double call_end = wall_seconds() + kStepCallSeconds;
-  long done = 0;
-  res.success = true;
-  while (done < req.steps && res.success) {
-    const double now = wall_seconds();
-    if (now >= call_end) break;
-    done += run_steps(req.steps - done, std::max(std::min(schedule_.next_due(), call_end), now));
-    res.success = settle_guard();
-    publish_due(wall_seconds());
-  }
-  if (res.success) check_holders_and_strain();
-  res.time = sim_time();
-  const std::string stepped = "stepped " + std::to_string(done) + " step(s)";
-  if (res.success && done < req.steps) queued_steps_ = req.steps - done;
-  res.message =
-      !res.success ? "stopped at the last good state: the stability guard could not "
-                     "recover (" +
-                         last_problem_ + "); ~reset or ~configure to resume"
-      : recoveries_ > detections
-          ? stepped + "; the stability guard rolled back and retried (" + last_problem_ + ")"
-          : stepped;
-  if (queued_steps_ > 0)
-    res.message += "; queued the other " + std::to_string(queued_steps_) + queued_note;
   return true;
 }
 
+void SimNode::start_step_call(const Step::Request& req, Step::Response* res,
+                              const ReplyPtr& reply) {
+  res->time = sim_time();
+  res->success = false;
+  if (!paused_)
+    res->message = "not paused: call ~pause with data: true first";
+  else if (req.steps < 1 || req.steps > 10000000)
+    res->message = "steps must be in [1, 10000000], got " + std::to_string(req.steps);
+  else if (queued_steps_ + req.steps > kMaxQueuedSteps)
+    res->message = std::to_string(queued_steps_) + " step(s) are still queued; at most " +
+                   std::to_string(kMaxQueuedSteps) + " may wait";
+  if (!res->message.empty()) {
+    reply->set();
+    return;
+  }
+  if (queued_steps_ > 0) {  // after the ones waiting (their call was answered)
+    queued_steps_ += req.steps;
+    res->success = true;
+    res->message = "queued " + std::to_string(req.steps) + " step(s) behind " +
+                   std::to_string(queued_steps_ - req.steps) + " still queued" + kQueuedNote;
+    reply->set();
+    return;
+  }
+  // Run by the loop in slices with the outputs between (run_queued_steps); answered by
+  // answer_step_call().
+  queued_steps_ = req.steps;
+  step_call_ = std::make_unique<StepCall>();
+  step_call_->reply = reply;
+  step_call_->res = res;
+  step_call_->requested = req.steps;
+  step_call_->steps_before = static_cast<long>(steps_total_);
+  step_call_->detections_before = recoveries_;
+  step_call_->answer_by = wall_seconds() + kStepCallSeconds;
+}
+
+void SimNode::answer_step_call(double now) {
+  StepCall& c = *step_call_;
+  const bool stopped = guard_.failed();
+  if (queued_steps_ > 0 && !stopped && paused_ && now < c.answer_by) return;
+  Step::Response& res = *c.res;
+  const long done = static_cast<long>(steps_total_) - c.steps_before;
+  res.time = sim_time();
+  res.success = !stopped;
+  const std::string stepped = "stepped " + std::to_string(done) + " step(s)";
+  res.message =
+      stopped ? "stopped at the last good state: the stability guard could not "
+                "recover (" +
+                    last_problem_ + "); ~reset or ~configure to resume"
+      : recoveries_ > c.detections_before
+          ? stepped + "; the stability guard rolled back and retried (" + last_problem_ + ")"
+          : stepped;
+  if (!stopped && done < c.requested && queued_steps_ == 0)
+    res.message +=
+        "; the other " + std::to_string(c.requested - done) + " were dropped (~pause, ~reset)";
+  if (queued_steps_ > 0)
+    res.message += "; queued the other " + std::to_string(queued_steps_) + kQueuedNote;
+  c.reply->set();  // (res belongs to the caller from here on)
+  step_call_.reset();
+}
+
 bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
-  const bool ok = grasp(req, res);
+  bool ok = true;
+  if (!in_loop([&] { ok = grasp(req, res); })) {
+    res.success = false;
+    res.message = "the node is shutting down";
+  }
   res.message = clip_reply(res.message);
   return ok;
 }
@@ -394,17 +480,25 @@ bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
   res.message = "grasp '" + req.name + "' holds segment " + std::to_string(segment) + " of rod '" +
                 req.rod + "' (source " + to_string(source) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  guard_.mark_good(world_);  // a rollback goes back to the grasp, not to before it
+  sim_.mark_good();  // a rollback goes back to the grasp, not to before it
   bump_time();
   refresh_layout();
   return true;
 }
 
 bool SimNode::on_release(Release::Request& req, Release::Response& res) {
+  if (!in_loop([&] { release(req, res); })) {
+    res.success = false;
+    res.message = "the node is shutting down";
+  }
+  return true;
+}
+
+void SimNode::release(Release::Request& req, Release::Response& res) {
   if (req.name.size() > kMaxNameLength) {
     res.success = false;
     res.message = "no grasp named '" + clip(req.name) + "'";
-    return true;
+    return;
   }
   const corde::GraspState* g = grasps_.find(req.name);
   if (waiting_to_take_hold(req.name)) {
@@ -413,13 +507,13 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
     res.success = true;
     res.message = "grasp '" + req.name + "' will not take hold (its scene script ended)";
     ROS_INFO("corde_sim: %s", res.message.c_str());
-    return true;
+    return;
   }
   if (!g || !g->held) {
     res.success = false;
     res.message =
         !g ? "no grasp named '" + req.name + "'" : "grasp '" + req.name + "' is already released";
-    return true;
+    return;
   }
   grasps_.release(world_, req.name);
   end_script(req.name, "was released (~release)");
@@ -427,13 +521,16 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   res.message = "released grasp '" + req.name + "'";
   if (forget_grasp(req.name)) res.message += " (made through ~grasp: its topics end)";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  guard_.mark_good(world_);
+  sim_.mark_good();
   bump_time();
   refresh_layout();
-  return true;
 }
 
 bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
+  return in_loop([&] { list_grasps(res); });  // (fails the call when the node shuts down)
+}
+
+void SimNode::list_grasps(ListGrasps::Response& res) const {
   for (const auto& kv : grasps_.grasps()) {
     const corde::GraspState& g = kv.second;
     auto w = wiring_.find(kv.first);
@@ -460,7 +557,6 @@ bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
     p.orientation.w = q.w();
     res.holders.push_back(p);
   }
-  return true;
 }
 
 }  // namespace corde_sim

@@ -162,8 +162,8 @@ int run(int argc, char** argv) {
         return usage_error(a + " needs a " + (zero_ok ? "non-negative" : "positive") +
                            " number, got '" + v + "'");
       if (a == "--max-speed") options.limits.max_speed = x;
-      if (a == "--max-strain") options.max_strain = x;
-      if (a == "--max-energy") options.max_specific_energy = x;
+      if (a == "--max-strain") options.limits.max_stretch = options.limits.max_compression = x;
+      if (a == "--max-energy") options.limits.max_specific_energy = x;
       if (a == "--max-steps") options.max_steps = x;
     } else if (a == "--duration" || a == "--dt" || a == "--set" || a == "--out" || a == "--every" ||
                a == "--reactions" || a == "--energies") {

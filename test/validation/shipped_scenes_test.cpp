@@ -60,7 +60,7 @@ TEST(ShippedScenes, HelicalBucklingSettlesOnTheLocalizedHelix) {
                        {"rods.0.elements=200", "rods.0.initial.node_velocities.0.node=100",
                         "rods.0.boundary.1.ramp_time=10", "duration=20"});
   RunOptions options;
-  options.max_specific_energy = 0.0;  // the twisted rod stores 1.1e4 J/kg
+  options.limits.max_specific_energy = 0.0;  // the twisted rod stores 1.1e4 J/kg
   const RunResult r = run_scene(&s, options);
   ASSERT_TRUE(r.ok) << r.problem;
   const Rod& rod = s.world.rods()[0];

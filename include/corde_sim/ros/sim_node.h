@@ -1,10 +1,10 @@
 // corde_sim_node's adapter: ROS parameters, topics, tf and services in, calls on the rod library,
 // tf frames, markers, state and diagnostics out. No physics here.
 //
-// One thread runs the simulation loop and serves every callback between batches of steps, so
-// inputs (poses, wrenches, service requests) are applied at the start of a step and nothing in
-// the library is touched concurrently. The loop is paced on the steady wall clock, never on ROS
-// time, so it also works when the node itself publishes /clock.
+// Every input reaches the simulation as a command of the node's one queue (command_queue.h, which
+// states the threading model): only the loop thread applies them, between batches of steps, so
+// nothing in the library is touched concurrently. The loop is paced on the steady wall clock,
+// never on ROS time, so it also works when the node itself publishes /clock.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -20,6 +20,8 @@
 #include <tf2_ros/buffer.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -37,13 +39,17 @@
 #include "corde_sim/WorldState.h"
 #include "corde_sim/grasp/grasp.h"
 #include "corde_sim/grasp/grasp_set.h"
+#include "corde_sim/ros/command_queue.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_events.h"
 #include "corde_sim/ros/node_params.h"
 #include "corde_sim/ros/output_schedule.h"
 #include "corde_sim/ros/outputs.h"
 #include "corde_sim/ros/pacer.h"
+#include "corde_sim/ros/reconfigure_input.h"
 #include "corde_sim/ros/robot_obstacles.h"
+#include "corde_sim/ros/service_threads.h"
+#include "corde_sim/ros/tf_input.h"
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/step_guard.h"
@@ -76,6 +82,8 @@ class SimNode {
   // Reads and validates parameters, loads the scene and sets up ROS interfaces. Throws
   // std::invalid_argument (bad parameter) or corde::SceneError (bad scene).
   SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh);
+  // Releases callers still waiting for a command, then stops the service threads.
+  ~SimNode();
   // Runs until shutdown (or for ~benchmark seconds). Returns the process exit code.
   int run();
 
@@ -105,20 +113,23 @@ class SimNode {
   // Whether grasp `name` is scripted, not held and its script will still take hold (before its
   // grasp_time, or unable to take hold yet): not one its script already let go.
   bool waiting_to_take_hold(const std::string& name) const;
-  // "" or why a world whose steps cost more than kMaxStepSeconds of wall time cannot be run:
-  // estimated from the current world's step cost per element first (a hopeless request costs
-  // nothing), then measured by one step of a copy.
-  std::string check_step_cost(const corde::World& candidate) const;
   // A released grasp made through ~grasp (not the scene's), without a wrench: its topics and its
   // entry go. Returns whether it did.
   bool forget_grasp(const std::string& name);
   void refresh_layout();
   void refresh_if_grasps_changed();
-  void apply_inputs();
+  // The loop's side of the command queue: applies every waiting command, oldest first.
+  void drain_commands();
+  // No command is applied from now on: callers still waiting (a ~step included) return.
+  void close_commands();
+  // (loop) A grasp input, checked against its grasp (held, stamp order, tf source), becomes a
+  // command of the driver at the current world time (corde::Simulation::submit).
+  void apply_input(const InputEvent& e);
+  // Runs `fn` in the loop thread and waits (a service thread); false when the node shuts down.
+  bool in_loop(const std::function<void()>& fn);
   void check_holders_and_strain();
 
   // Inputs.
-  void on_tf(const ros::MessageEvent<tf2_msgs::TFMessage const>& ev, bool is_static);
   void on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg);
   void on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg);
   void on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg);
@@ -129,24 +140,34 @@ class SimNode {
   std::string resolve_scene(const std::string& path, std::string* error) const;
   double ros_to_sim_interval(double ros_seconds) const;
 
-  // Services.
+  // Services. Each callback runs on a service thread: the part that needs no simulation state
+  // (reading a scene, a trial step of a candidate world) runs there, the rest in the loop.
   bool on_reset(Reset::Request& req, Reset::Response& res);
   bool on_configure(Configure::Request& req, Configure::Response& res);
   void reset(Reset::Request& req, Reset::Response& res);
   void configure(Configure::Request& req, Configure::Response& res);
+  // (loop) The request applied to a copy of the world: "" or why it cannot be.
+  std::string configured_copy(const Configure::Request& req, corde::World* world,
+                              SimSettings* settings, std::vector<std::string>* resample,
+                              std::string* summary) const;
   // "" or, while the guard has given up, what a refused ~reset or ~configure adds to its reply.
   std::string stopped_note() const;
   bool on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
   bool on_step(Step::Request& req, Step::Response& res);
+  // (loop) Queues the steps of a ~step request; its reply is set by answer_step_call().
+  void start_step_call(const Step::Request& req, Step::Response* res, const ReplyPtr& reply);
+  // (loop) Answers the waiting ~step call once its steps are run, dropped, stopped by the guard,
+  // or kStepCallSeconds have passed (the rest then stays queued).
+  void answer_step_call(double now);
   bool on_grasp(Grasp::Request& req, Grasp::Response& res);
   bool grasp(Grasp::Request& req, Grasp::Response& res);  // on_grasp before bounding the reply
   bool on_release(Release::Request& req, Release::Response& res);
+  void release(Release::Request& req, Release::Response& res);
+  void pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res);
+  void list_grasps(ListGrasps::Response& res) const;
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
-  // dynamic_reconfigure's callback (its own thread): checks the request against the last accepted
-  // one (the reply shows what was kept) and leaves it for the loop, which applies it in
-  // apply_reconfigure().
-  void on_reconfigure(NodeConfig& config, uint32_t level);
-  void apply_reconfigure();
+  // (loop) Values accepted by dynamic_reconfigure (ReconfigureInput).
+  void apply_reconfigure(const NodeConfig& c);
 
   // Loop and outputs.
   void advance(double now);
@@ -185,15 +206,27 @@ class SimNode {
   NodeParams params_;
   std::string scene_path_;
   corde::Scene initial_;  // the scene as loaded, for ~reset
-  // The simulation driver: world, guard, grasps, scripts and the commands since the guard's
-  // snapshot (replayed after a rollback); the node feeds it and reads its state.
+  // The simulation driver: world, guard, grasps, scripts, the holder limits (configuration,
+  // outside the guard's snapshot) and the commands since the snapshot (replayed after a
+  // rollback); the node feeds it from the command queue and reads its state.
   corde::Simulation sim_;
   corde::World& world_ = sim_.world();
   corde::GraspSet& grasps_ = sim_.grasps();
   corde::StepGuard& guard_ = sim_.guard();
   std::map<std::string, GraspWiring> wiring_;
   bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
-  InputQueue inputs_;
+  // The one way in (command_queue.h); the loop applies it in drain_commands().
+  CommandQueue commands_;
+  std::atomic<bool> loop_running_{false};  // run() drains the queue: callers may wait on it
+  // The ~step call waiting for its steps (loop thread only).
+  struct StepCall {
+    ReplyPtr reply;
+    Step::Response* res = nullptr;
+    long requested = 0, steps_before = 0;
+    int detections_before = 0;
+    double answer_by = 0.0;  // steady-clock s
+  };
+  std::unique_ptr<StepCall> step_call_;
   SimSettings settings_;
   int next_marker_id_ = 0;
 
@@ -225,20 +258,11 @@ class SimNode {
   double next_status_ = 0.0;
 
   ros::Publisher tf_pub_, marker_pub_, state_pub_, clock_pub_;
-  ros::Subscriber tf_sub_, tf_static_sub_;
-  std::vector<ros::ServiceServer> services_;
+  std::unique_ptr<ServiceThreads> services_;  // stopped in ~SimNode, after close_commands()
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<TfInput> tf_input_;  // fills tf_buffer_
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
-  // dynamic_reconfigure runs on its own queue and thread: its server writes every parameter to
-  // the master (one XMLRPC round trip each) per request, which must not stall the loop when a
-  // client sends many requests or the master is slow. Declared in this order so that the thread
-  // stops first, then the server, then the queue and the mutex go.
-  ros::CallbackQueue reconfigure_queue_;
-  std::mutex reconfigure_mutex_;
-  NodeConfig reconfigure_accepted_;   // the last accepted values (reconfigure_mutex_)
-  bool reconfigure_pending_ = false;  // not applied by the loop yet (reconfigure_mutex_)
-  std::unique_ptr<dynamic_reconfigure::Server<NodeConfig>> reconfigure_;
-  std::unique_ptr<ros::AsyncSpinner> reconfigure_spinner_;
+  std::unique_ptr<ReconfigureInput> reconfigure_;  // its own thread; stopped in ~SimNode
   TfFrames tf_frames_;
   RodPaths rod_paths_;
 

@@ -24,15 +24,10 @@ struct RunOptions {
   double progress_interval = 0.25;
   // Runaway detection. An explicit step that loses stability does not always reach NaN: it can
   // run on with finite garbage (a 1 m pendulum 6 m from its pin, 1e10 J). The run stops at the
-  // first state that fails these checks, and the CSV ends with the last frame that passed them.
-  ValidityLimits
-      limits;  // finite, unit quaternions, node speed, segment spin (stability/state_checks.h)
-  // |axial strain| of any segment; 0: no check. The shipped scenes stay below 2.2 (thread).
-  double max_strain = 10.0;
-  // (kinetic + elastic energy) / mass of any rod, J/kg; 0: no check. 1e5 J/kg is the kinetic
-  // energy of a rod moving as a whole at 447 m/s; the shipped scenes stay below 1.1e4 J/kg (the
-  // most: helical_buckling's 27 turns of stored twist), the others below 11 J/kg.
-  double max_specific_energy = 1e5;
+  // first state that fails these checks (stability/state_checks.h: finite, unit quaternions,
+  // speeds, |axial strain| 10, specific energy 1e5 J/kg), and the CSV ends with the last frame
+  // that passed them.
+  StateLimits limits = runaway_state_limits();
   // Refuse runs of more steps (duration / time_step) than this: 1e15 s at 1e-300 s would
   // overflow the step counter, and 1e9 steps already take about 20 minutes for a small rod.
   double max_steps = 1e9;
@@ -91,7 +86,8 @@ void write_reaction_rows(std::ostream& out, const Scene& scene);
 void write_energy_header(std::ostream& out);
 void write_energy_rows(std::ostream& out, const World& world);
 
-// "" if the world passes the runaway checks of `options`, else the first problem found.
+// "" if the world passes the runaway checks of `options` (check_state with options.limits), else
+// the first problem found (StateProblem::message()).
 std::string run_problem(const World& world, const RunOptions& options);
 
 // Steps the scene's world for the duration through the simulation driver (simulation.h),

@@ -21,11 +21,14 @@
 // while K's top bending-shear mode moves the nodes. The smallest step of the three families wins.
 #pragma once
 
+#include <cmath>
 #include <string>
 
 #include "corde_sim/rod/rod.h"
 
 namespace corde {
+
+class World;
 
 struct StabilityEstimate {
   double time_step = 0.0;  // predicted critical step (s): the minimum of the three below
@@ -67,6 +70,18 @@ StateStabilityEstimate estimate_stability_at_state(const Rod& rod);
 // rest value where they agree to round-off): what `time_step: auto` (at the start) and the
 // stability guard (at a rollback) use. Costs about 100 factorisations of the rod's 6x6 blocks.
 double state_critical_time_step(const Rod& rod);
+
+// The explicit step limit of a world: the smallest over its rods, the one function behind
+// time_step: auto, the scene's stability warning, the guard's choice between halving and the
+// implicit method, ~configure's margin and the element probes. `at_state` false: each rod's
+// critical_time_step (the straight rest state); true: its state_critical_time_step (the lower
+// of that and the limit about its current state: a rod built bent, stretched or crumpled).
+struct WorldStepLimit {
+  double time_step = INFINITY;  // s; a rod's NaN estimate wins (reported, not hidden)
+  int rod = -1;                 // the limiting rod (-1: no rods)
+  std::string limiting;         // its family ("stretch", ...) or "start shape" (the state's)
+};
+WorldStepLimit explicit_step_limit(const World& world, bool at_state);
 // `rotational_inertia_scale: auto`: the smallest rotary-inertia scale (Rod::
 // set_rotational_inertia_scale, >= 1) at which the bending-shear family's critical step reaches
 // 0.99 of the next limit, the stretch or twist family's (or, when the penalty on the nodes alone

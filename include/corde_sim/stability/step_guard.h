@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "corde_sim/stability/state_checks.h"
 #include "corde_sim/world/world.h"
 
 namespace corde {
@@ -24,22 +25,9 @@ struct GuardSettings {
   // keep the cost (a pass over the state, one energy evaluation and one copy of the world per
   // check, about 1.5 steps' worth) to a few percent of the steps (BM_GuardOverhead).
   int check_every = 64;
-  // Runaway speeds (as ValidityLimits, stability/state_checks.h): no cable in a manipulation scene
-  // moves at 100 m/s or spins at 1e5 rad/s, and a blow-up crosses these within a few steps.
-  double max_speed = 100.0;        // m/s, any node
-  double max_angular_speed = 1e5;  // rad/s, any segment
-  // Strains beyond what a discretised rod can mean: they mark a numerical failure, not a
-  // material one (the node's max_strain warns about those). Set just outside what the softest
-  // shipped scene reaches: the paper's thread (E_s A = 0.06 N, E = G = 10 Pa) stretches its
-  // segments by up to 2.2 while it whips, and its free end's frames turn up to 175 degrees off
-  // their tangent and its elements bend up to 163 degrees, legitimately, since nothing in it
-  // resists (docs/stability_guard.md has every shipped scene's maxima). So the shear and bend
-  // checks are off by default (0); for cables with real bending and shear stiffness 0.8 (45
-  // degrees) and 1.6 (90 degrees per element) are sound.
-  double max_stretch = 3.0;      // (l - l0) / l0: four times its rest length; 0: no check
-  double max_compression = 0.9;  // (l0 - l) / l0: a tenth of its rest length; 0: no check
-  double max_shear_angle = 0.0;  // rad, a frame's d3 off its centreline tangent; 0: no check
-  double max_bend_angle = 0.0;   // rad, an element turned from its rest shape; 0: no check
+  // The state checks (stability/state_checks.h, docs/stability_guard.md): finite, unit
+  // quaternions, speeds, stretch, shear and bend (off by default), penetration.
+  StateLimits limits;
   // Energy growth without work: over the steps since the last snapshot, the rise of the total
   // energy (kinetic, elastic, gravity) may not exceed the work the drives, clamps, loads,
   // external forces and contacts (moving obstacles, push-out) can have done, counted as the sum
@@ -48,13 +36,6 @@ struct GuardSettings {
   // the integrators' bounded energy errors.
   double energy_tolerance = 0.1;
   double energy_floor = 1e-3;
-  // Penetration: the contact stage's deepest contact at the start of the last step (ContactStats)
-  // deeper than this fraction of the rod's radius, into a static obstacle or another rod (or the
-  // rod itself), fails the check: the solver keeps such contacts within about 1 % of the radius,
-  // so a state that deep went through a surface. A moving obstacle (a robot link, a keyframed
-  // one) can impose any depth (a cable pinched between two links): it is not checked here but
-  // reported (deep_contact_report, ContactSettings::deep_penetration). 0: no check.
-  double max_penetration = 0.5;
   // Retries: halve the step up to max_halvings times (each cures the failure only if it persists
   // through a replay). An explicit method switches to the implicit one (at the user's step)
   // when that is exhausted, or at once when the stability estimate says the halved steps would
@@ -68,13 +49,17 @@ struct GuardSettings {
 
 struct GuardEvent {
   enum class Kind {
-    kNonFinite,      // a NaN or infinity in the state (or the step threw)
-    kSpeed,          // a node or segment beyond max_speed / max_angular_speed
-    kStretch,        // a segment beyond max_stretch or max_compression
-    kShear,          // a frame beyond max_shear_angle off its tangent
-    kBend,           // an element turned beyond max_bend_angle from its rest shape
+    // The state checks (StateCheck, limits in GuardSettings::limits):
+    kNonFinite,       // a NaN or infinity in the state (or the step threw, or did not converge)
+    kQuaternion,      // a quaternion off unit norm
+    kSpeed,           // a node or segment beyond max_speed / max_angular_speed
+    kStretch,         // a segment beyond max_stretch or max_compression
+    kShear,           // a frame beyond max_shear_angle off its tangent
+    kBend,            // an element turned beyond max_bend_angle from its rest shape
+    kSpecificEnergy,  // a rod beyond max_specific_energy (off by default)
+    kPenetration,     // a rod deeper than max_penetration in a static obstacle or another rod
+    // The guard's own:
     kEnergy,         // energy grew more than the work done allows
-    kPenetration,    // a rod deeper than max_penetration in a static obstacle or another rod
     kRestored,       // back to the user's step and method after good steps
     kUnrecoverable,  // no retry helped: the world stays at its last good state
   };
@@ -95,10 +80,6 @@ struct GuardEvent {
 
 const char* guard_event_kind_name(GuardEvent::Kind kind);
 
-// Whether the library's World::step runs Integrator::kImplicitEuler, so that the guard can fall
-// back on it (allow_implicit).
-bool guard_has_implicit();
-
 // The first problem found in a state (found false when none).
 struct GuardProblem {
   bool found = false;
@@ -107,10 +88,6 @@ struct GuardProblem {
   int item = -1;
   std::string detail;
 };
-
-// The state checks alone (finite, speeds, strains), cheapest first. No energy check: that needs
-// the guard's window.
-GuardProblem check_state(const World& world, const GuardSettings& settings);
 
 class StepGuard {
  public:

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "corde_sim/integrators/integrator_names.h"
+
 namespace corde {
 
 namespace {
@@ -635,8 +637,7 @@ const char* integrator_name(Integrator integrator) {
 }
 
 bool parse_integrator(const std::string& name, Integrator* integrator) {
-  for (Integrator i : {Integrator::kSemiImplicitEuler, Integrator::kSplitRotation,
-                       Integrator::kImplicitEuler, Integrator::kBdf2})
+  for (Integrator i : kIntegrators)
     if (name == integrator_name(i)) {
       *integrator = i;
       return true;

@@ -1,7 +1,5 @@
 #include "corde_sim/scene/automatic_choices.h"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -121,56 +119,76 @@ ImplicitStepChoice implicit_time_step(const Scene& scene) {
 }
 
 double explicit_time_step(const World& world, std::string* why) {
-  double limit = INFINITY;
-  for (const Rod& rod : world.rods()) {
-    const StabilityEstimate e = estimate_stability(rod);
-    // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
-    const double h = state_critical_time_step(rod);
-    if (std::isnan(h) || h < limit) {
-      limit = h;
-      *why = "the stability limit of rod '" + rod.name() + "' (" +
-             (h < e.time_step ? std::string("modes of its start shape") : e.limiting + " modes") +
-             ")";
-    }
-  }
+  // The start shape's own limit where it is lower (a rod built bent, stretched or compressed).
+  const WorldStepLimit l = explicit_step_limit(world, true);
+  if (l.rod >= 0)
+    *why = "the stability limit of rod '" + world.rods()[l.rod].name() + "' (" +
+           (l.limiting == "start shape" ? std::string("modes of its start shape")
+                                        : l.limiting + " modes") +
+           ")";
+  const double limit = l.time_step;
   return limit > 0.0 && std::isfinite(limit) ? 0.8 * limit : 0.0;
 }
 
 namespace {
 
-double thread_cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+// The work of a step counted in element evaluations (one element's forces and torques: what an
+// explicit step does per element). The implicit step costs, per element, a fixed part (the
+// residual, drives, the line search's energies), a part per Newton iteration (gradient and
+// Hessian blocks) and a part per factorisation (the block Cholesky; a factor is reused while the
+// rods barely move); a contact stage costs its detection per element, every step. The weights
+// are fixed ratios, fitted once to the thread CPU times of 13 shipped scenes under both methods
+// (docs/benchmark.md): the choice depends on the scene, never on the machine it runs on.
+constexpr double kImplicitStepWork = 8.0;      // per element and implicit step
+constexpr double kNewtonIterationWork = 4.0;   // per element and Newton iteration
+constexpr double kFactorisationWork = 7.0;     // per element and factorisation
+constexpr double kContactDetectionWork = 1.2;  // per element and step with a contact stage
 
-// CPU seconds per step of `integrator` at step h on a copy of the world: one step to warm up,
-// three to size the batches, then five batches of equal steps (3 to 2000 each) within `budget`
-// seconds in all, the fastest batch counted. Thread CPU time and the fastest batch keep other
-// processes and a preemption out of the figure; the clock is read only around batches (a read
-// costs about as much as a small rod's step). Throws what the step throws; NaN if the copy's
-// state turned non-finite.
-double seconds_per_step(const World& world, Integrator integrator, double h, double budget) {
+struct TrialWork {
+  double per_step = 0.0;        // element evaluations per step, averaged over the trial
+  double iterations = 0.0;      // Newton iterations per step (implicit, the most any rod took)
+  double factorisations = 0.0;  // factorisations per step and rod (implicit)
+  bool detection = false;       // the world has a contact stage
+};
+
+// `steps` steps of `integrator` at step h on a copy of the world, their work counted. The same
+// scene gives the same count on any machine. Throws what the step throws; per_step NaN if the
+// copy's state turned non-finite.
+TrialWork trial_work(const World& world, Integrator integrator, double h, int steps) {
   World w = world;
   w.integrator = integrator;
   w.time_step = h;
-  w.step();
-  double start = thread_cpu_seconds();
-  w.step(3);
-  const double first = (thread_cpu_seconds() - start) / 3.0;
-  const int n = static_cast<int>(std::clamp(budget / 5.0 / std::max(first, 1e-9), 3.0, 2000.0));
-  double best = first;
-  for (int batch = 0; batch < 5; ++batch) {
-    start = thread_cpu_seconds();
-    w.step(n);
-    best = std::min(best, (thread_cpu_seconds() - start) / n);
+  const bool implicit = is_implicit(integrator);
+  double elements = 0.0;
+  for (const Rod& rod : world.rods()) elements += rod.num_segments();
+  const double rods = static_cast<double>(std::max<size_t>(1, world.rods().size()));
+  TrialWork t;
+  double work = 0.0;
+  for (int i = 0; i < steps; ++i) {
+    const long factorised = w.implicit_factorisations();
+    w.step();
+    const double iterations = implicit ? w.implicit_stats().iterations : 0.0;
+    const double factorisations =
+        implicit ? static_cast<double>(w.implicit_factorisations() - factorised) / rods : 0.0;
+    double per_element = implicit ? kImplicitStepWork + kNewtonIterationWork * iterations +
+                                        kFactorisationWork * factorisations
+                                  : 1.0;
+    if (w.contacts()) per_element += kContactDetectionWork;
+    work += elements * per_element;
+    t.iterations += iterations / steps;
+    t.factorisations += factorisations / steps;
+    t.detection = t.detection || w.contacts();
   }
-  return w.finite() ? best : NAN;
+  t.per_step = w.finite() ? work / steps : NAN;
+  return t;
 }
+
+constexpr int kExplicitTrialSteps = 32;
+constexpr int kImplicitTrialSteps = 8;
 
 }  // namespace
 
-IntegratorChoice choose_integrator(const Scene& scene, double given_step, double trial_seconds) {
+IntegratorChoice choose_integrator(const Scene& scene, double given_step) {
   const World& world = scene.world;
   IntegratorChoice c;
   std::string limit_why;
@@ -195,29 +213,36 @@ IntegratorChoice choose_integrator(const Scene& scene, double given_step, double
   c.explicit_step = explicit_h;
   c.implicit_step = implicit.time_step;
   std::string implicit_problem;
+  TrialWork im_work, ex_work;
   try {
-    c.implicit_cost =
-        seconds_per_step(world, Integrator::kImplicitEuler, implicit.time_step, trial_seconds);
+    im_work =
+        trial_work(world, Integrator::kImplicitEuler, implicit.time_step, kImplicitTrialSteps);
+    c.implicit_cost = im_work.per_step;
     if (std::isnan(c.implicit_cost)) implicit_problem = "its trial steps turned non-finite";
   } catch (const std::exception& e) {
     implicit_problem = e.what();
   }
   if (explicit_h > 0.0) {
-    c.explicit_cost = seconds_per_step(world, kDefaultIntegrator, explicit_h, trial_seconds);
+    ex_work = trial_work(world, kDefaultIntegrator, explicit_h, kExplicitTrialSteps);
+    c.explicit_cost = ex_work.per_step;
   }
   const double explicit_rate = explicit_h > 0.0 ? c.explicit_cost / explicit_h : INFINITY;
   const double implicit_rate =
       implicit_problem.empty() ? c.implicit_cost / implicit.time_step : INFINITY;
   const std::string ex = std::string(explicit_name) + fmt(" at %.3g s steps (0.8 x ", explicit_h) +
-                         limit_why +
-                         fmt(") costs %.3g us per step, %.3g s of CPU per simulated s",
-                             c.explicit_cost * 1e6, explicit_rate);
-  const std::string im = implicit_problem.empty()
-                             ? fmt("implicit_euler at %.3g s steps (", implicit.time_step) +
-                                   implicit.why +
-                                   fmt(") costs %.3g us per step, %.3g s of CPU per simulated s",
-                                       c.implicit_cost * 1e6, implicit_rate)
-                             : "implicit_euler failed its trial (" + implicit_problem + ")";
+                         limit_why + ") costs " +
+                         fmt("%.3g element evaluations per step", c.explicit_cost) +
+                         (ex_work.detection ? " (with contact detection)" : "") +
+                         fmt(", %.3g per simulated s", explicit_rate);
+  const std::string im =
+      implicit_problem.empty()
+          ? fmt("implicit_euler at %.3g s steps (", implicit.time_step) + implicit.why +
+                fmt(") costs %.3g element evaluations per step (%.3g Newton iterations",
+                    c.implicit_cost, im_work.iterations) +
+                fmt(", %.3g factorisations", im_work.factorisations) +
+                (im_work.detection ? ", contact detection" : "") +
+                fmt("), %.3g per simulated s", implicit_rate)
+          : "implicit_euler failed its trial (" + implicit_problem + ")";
   if (!(explicit_rate <= implicit_rate) && implicit_problem.empty()) {
     c.integrator = Integrator::kImplicitEuler;
     c.time_step = implicit.time_step;

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/io/file_read.h"
 #include "corde_sim/scene/automatic_choices.h"
 #include "corde_sim/stability/explicit_step_limit.h"
@@ -465,17 +466,9 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
 }
 
 void check_time_step(Scene* scene, const Value* given) {
-  double limit = INFINITY;
-  std::string which;
-  StabilityEstimate worst;
-  for (const Rod& rod : scene->world.rods()) {
-    const StabilityEstimate e = estimate_stability(rod);
-    if (which.empty() || std::isnan(e.time_step) || e.time_step < limit) {
-      limit = e.time_step;
-      which = rod.name();
-      worst = e;
-    }
-  }
+  const WorldStepLimit worst = explicit_step_limit(scene->world, false);
+  const double limit = worst.time_step;
+  const std::string which = worst.rod >= 0 ? scene->world.rods()[worst.rod].name() : "";
   if (!given) {
     // A degenerate rod (radius 1e-100) can give an infinite or zero limit: no step to run at.
     if (!(limit > 0.0 && std::isfinite(limit)))
@@ -579,8 +572,9 @@ Scene build_scene(const YAML::Node& root, const std::string& source) {
   scene.world.integrator = kDefaultIntegrator;
   bool integrator_auto = false;
   if (auto v = top.find("integrator")) {
-    const std::string name =
-        v->choice({"semi_implicit_euler", "split_rotation", "implicit_euler", "bdf2", "auto"});
+    std::vector<std::string> names = integrator_name_list();
+    names.push_back("auto");
+    const std::string name = v->choice(names);
     integrator_auto = name == "auto";
     if (!integrator_auto) parse_integrator(name, &scene.world.integrator);
   }

@@ -125,8 +125,7 @@ Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
   }
   Probe p{build(tree), {}, {}};
   // A given step the explicit method cannot take at the finer probe's resolution: its stable one.
-  double limit = INFINITY;
-  for (const Rod& r : p.scene.world.rods()) limit = std::min(limit, critical_time_step(r));
+  const double limit = explicit_step_limit(p.scene.world, false).time_step;
   if (!like && is_explicit(p.scene.world.integrator) && p.scene.world.time_step > limit &&
       limit > 0.0) {
     tree["time_step"] = 0.8 * limit;

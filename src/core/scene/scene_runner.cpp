@@ -23,33 +23,6 @@ std::string csv_field(const std::string& s) {
   return out + "\"";
 }
 
-// The strain and energy checks, which cost about as much as a step's forces.
-std::string runaway_problem(const World& world, const RunOptions& o) {
-  for (const Rod& rod : world.rods()) {
-    if (o.max_strain > 0.0)
-      for (int s = 0; s < rod.num_segments(); ++s) {
-        const double e = rod.stretch_strain(s);
-        if (!(std::abs(e) <= o.max_strain)) {
-          char buf[120];
-          std::snprintf(buf, sizeof buf, "': segment %d has an axial strain of %g", s, e);
-          return "rod '" + rod.name() + buf + " (runaway, limit max_strain)";
-        }
-      }
-    if (o.max_specific_energy > 0.0) {
-      double mass = 0.0;
-      for (double m : rod.node_masses()) mass += m;
-      const Energies e = rod.energies(world.gravity);
-      const double specific = (e.kinetic() + e.elastic()) / mass;
-      if (!(specific <= o.max_specific_energy)) {
-        char buf[120];
-        std::snprintf(buf, sizeof buf, "' has %g J/kg of kinetic + elastic energy", specific);
-        return "rod '" + rod.name() + buf + " (runaway, limit max_specific_energy)";
-      }
-    }
-  }
-  return "";
-}
-
 }  // namespace
 
 void write_csv_rows(std::ostream& out, const World& world) {
@@ -108,8 +81,7 @@ void write_energy_rows(std::ostream& out, const World& world) {
 }
 
 std::string run_problem(const World& world, const RunOptions& options) {
-  const std::string p = validity_problem(world, options.limits);
-  return p.empty() ? runaway_problem(world, options) : p;
+  return check_state(world, options.limits).message();
 }
 
 RunResult run_scene(Scene* scene, const RunOptions& options) {

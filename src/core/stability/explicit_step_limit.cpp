@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "corde_sim/model/rod_system.h"
+#include "corde_sim/world/world.h"
 
 namespace corde {
 namespace {
@@ -388,10 +389,40 @@ StateStabilityEstimate estimate_stability_at_state(const Rod& rod) {
   return e;
 }
 
+namespace {
+
+// The lower of the rest limit and the state's: at the rest state both agree to their
+// bisections' 1e-13, and the rest value is kept there exactly.
+bool state_is_lower(double state, double rest) { return state < rest * (1.0 - 1e-9); }
+
+}  // namespace
+
 double state_critical_time_step(const Rod& rod) {
   const double rest = critical_time_step(rod), state = estimate_stability_at_state(rod).time_step;
-  // At the rest state both agree to their bisections' 1e-13: keep the rest value there exactly.
-  return state < rest * (1.0 - 1e-9) ? state : rest;
+  return state_is_lower(state, rest) ? state : rest;
+}
+
+WorldStepLimit explicit_step_limit(const World& world, bool at_state) {
+  WorldStepLimit out;
+  for (size_t r = 0; r < world.rods().size(); ++r) {
+    const Rod& rod = world.rods()[r];
+    const StabilityEstimate rest = estimate_stability(rod);
+    double h = rest.time_step;
+    std::string limiting = rest.limiting;
+    if (at_state) {
+      const double state = estimate_stability_at_state(rod).time_step;
+      if (state_is_lower(state, h)) {
+        h = state;
+        limiting = "start shape";
+      }
+    }
+    if (out.rod < 0 || std::isnan(h) || h < out.time_step) {
+      out.time_step = h;
+      out.rod = static_cast<int>(r);
+      out.limiting = limiting;
+    }
+  }
+  return out;
 }
 
 double lifting_inertia_scale(const Rod& rod) {

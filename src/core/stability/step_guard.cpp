@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <type_traits>
 
 #include "corde_sim/model/element_energies.h"
 #include "corde_sim/stability/explicit_step_limit.h"
@@ -12,37 +11,30 @@
 namespace corde {
 namespace {
 
-// Integrator::kImplicitEuler where World::step runs it, found at compile time so that the guard
-// builds (without the implicit fallback) against a library that does not have it yet.
-template <class E, class = void>
-struct ImplicitOf {
-  static constexpr bool kAvailable = false;
-  static constexpr E kValue = E::kSemiImplicitEuler;
-};
-template <class E>
-struct ImplicitOf<E, std::void_t<decltype(E::kImplicitEuler)>> {
-  static constexpr bool kAvailable = true;
-  static constexpr E kValue = E::kImplicitEuler;
-};
-constexpr bool kHaveImplicit = ImplicitOf<Integrator>::kAvailable;
-constexpr Integrator kImplicit = ImplicitOf<Integrator>::kValue;
+constexpr Integrator kImplicit = Integrator::kImplicitEuler;
 
 const char* method_name(Integrator i) { return integrator_name(i); }
 
-std::string fmt(const char* f, double a, double b) {
-  char buf[200];
-  std::snprintf(buf, sizeof buf, f, a, b);
-  return buf;
-}
-
-GuardProblem problem(GuardEvent::Kind kind, const Rod& rod, int item, std::string detail) {
-  GuardProblem p;
-  p.found = true;
-  p.kind = kind;
-  p.rod = rod.name();
-  p.item = item;
-  p.detail = std::move(detail);
-  return p;
+GuardEvent::Kind guard_kind(StateCheck check) {
+  switch (check) {
+    case StateCheck::kNonFinite:
+      return GuardEvent::Kind::kNonFinite;
+    case StateCheck::kQuaternion:
+      return GuardEvent::Kind::kQuaternion;
+    case StateCheck::kSpeed:
+      return GuardEvent::Kind::kSpeed;
+    case StateCheck::kStretch:
+      return GuardEvent::Kind::kStretch;
+    case StateCheck::kShear:
+      return GuardEvent::Kind::kShear;
+    case StateCheck::kBend:
+      return GuardEvent::Kind::kBend;
+    case StateCheck::kSpecificEnergy:
+      return GuardEvent::Kind::kSpecificEnergy;
+    case StateCheck::kPenetration:
+      return GuardEvent::Kind::kPenetration;
+  }
+  return GuardEvent::Kind::kNonFinite;
 }
 
 const char* action_text(GuardEvent::Action a) {
@@ -63,24 +55,26 @@ const char* action_text(GuardEvent::Action a) {
 
 }  // namespace
 
-bool guard_has_implicit() { return kHaveImplicit; }
-
 const char* guard_event_kind_name(GuardEvent::Kind kind) {
   switch (kind) {
     case GuardEvent::Kind::kNonFinite:
-      return "non-finite";
+      return state_check_name(StateCheck::kNonFinite);
+    case GuardEvent::Kind::kQuaternion:
+      return state_check_name(StateCheck::kQuaternion);
     case GuardEvent::Kind::kSpeed:
-      return "speed";
+      return state_check_name(StateCheck::kSpeed);
     case GuardEvent::Kind::kStretch:
-      return "stretch";
+      return state_check_name(StateCheck::kStretch);
     case GuardEvent::Kind::kShear:
-      return "shear";
+      return state_check_name(StateCheck::kShear);
     case GuardEvent::Kind::kBend:
-      return "bend";
+      return state_check_name(StateCheck::kBend);
+    case GuardEvent::Kind::kSpecificEnergy:
+      return state_check_name(StateCheck::kSpecificEnergy);
+    case GuardEvent::Kind::kPenetration:
+      return state_check_name(StateCheck::kPenetration);
     case GuardEvent::Kind::kEnergy:
       return "energy";
-    case GuardEvent::Kind::kPenetration:
-      return "penetration";
     case GuardEvent::Kind::kRestored:
       return "restored";
     case GuardEvent::Kind::kUnrecoverable:
@@ -110,99 +104,6 @@ std::string GuardEvent::message() const {
     m += buf;
   }
   return m;
-}
-
-GuardProblem check_state(const World& world, const GuardSettings& s) {
-  using K = GuardEvent::Kind;
-  const bool shear = s.max_shear_angle > 0.0 && s.max_shear_angle < M_PI;
-  const double cos_shear = std::cos(s.max_shear_angle);
-  // An element turned by theta from its rest shape has |u - uhat| l = 2 sin(theta / 2).
-  const bool bend = s.max_bend_angle > 0.0 && s.max_bend_angle < M_PI;
-  const double max_turn = 2.0 * std::sin(0.5 * s.max_bend_angle);
-  for (const Rod& rod : world.rods()) {
-    const auto& x = rod.positions();
-    const auto& v = rod.velocities();
-    const auto& q = rod.orientations();
-    const auto& w = rod.angular_velocities();
-    for (int i = 0; i < rod.num_nodes(); ++i) {
-      if (!x[i].allFinite() || !v[i].allFinite())
-        return problem(K::kNonFinite, rod, i, "node " + std::to_string(i) + " is not finite");
-      const double speed = v[i].norm();
-      if (speed > s.max_speed)
-        return problem(K::kSpeed, rod, i,
-                       "node " + std::to_string(i) +
-                           fmt(" moves at %.3g m/s (limit %.3g)", speed, s.max_speed));
-    }
-    for (int k = 0; k < rod.num_segments(); ++k) {
-      if (!q[k].coeffs().allFinite() || !w[k].allFinite())
-        return problem(K::kNonFinite, rod, k, "segment " + std::to_string(k) + " is not finite");
-      const double spin = w[k].norm();
-      if (spin > s.max_angular_speed)
-        return problem(K::kSpeed, rod, k,
-                       "segment " + std::to_string(k) +
-                           fmt(" spins at %.3g rad/s (limit %.3g)", spin, s.max_angular_speed));
-    }
-    const auto& rest = rod.rest_lengths();
-    for (int k = 0; k < rod.num_segments(); ++k) {
-      const Vec3 d = x[k + 1] - x[k];
-      const double len = d.norm();
-      const double e = len / rest[k] - 1.0;
-      if ((s.max_stretch > 0.0 && e > s.max_stretch) ||
-          (s.max_compression > 0.0 && -e > s.max_compression))
-        return problem(
-            K::kStretch, rod, k,
-            "segment " + std::to_string(k) +
-                (e > 0 ? fmt(" stretched by %.3g (limit %.3g)", e, s.max_stretch)
-                       : fmt(" compressed by %.3g (limit %.3g)", -e, s.max_compression)));
-      if (!shear) continue;
-      const double c = len > 0.0 ? d.dot(director3(q[k])) / len : -1.0;
-      if (c < cos_shear)
-        return problem(K::kShear, rod, k,
-                       "segment " + std::to_string(k) +
-                           fmt(" frame %.3g rad off its tangent (limit %.3g)",
-                               std::acos(std::max(-1.0, std::min(1.0, c))), s.max_shear_angle));
-    }
-    const auto& uhat = rod.rest_strains();
-    for (int j = 0; bend && j + 1 < rod.num_segments(); ++j) {
-      const double l = 0.5 * (rest[j] + rest[j + 1]);
-      const double turn = (darboux(q[j], q[j + 1], l) - uhat[j]).norm() * l;
-      if (turn > max_turn)
-        return problem(K::kBend, rod, j,
-                       "element " + std::to_string(j) +
-                           fmt(" turned %.3g rad from its rest shape (limit %.3g)",
-                               2.0 * std::asin(std::min(1.0, 0.5 * turn)), s.max_bend_angle));
-    }
-  }
-  // The contact stage's deepest contact with a static obstacle or a rod, at the start of the last
-  // step: the solver keeps those within about 1 % of the radius, so one this deep went through a
-  // surface (a moving obstacle can impose a depth: reported by the contact stage, not checked).
-  const ContactSystem* cs = world.contacts();
-  if (s.max_penetration > 0.0 && cs && cs->stats().deepest >= 0) {
-    const auto& contacts = cs->contacts();
-    const int nr = static_cast<int>(world.rods().size());
-    int worst = -1;
-    double deepest = s.max_penetration;
-    for (size_t k = 0; k < contacts.size(); ++k) {
-      const Contact& c = contacts[k];
-      if (c.gap >= 0.0 || c.rod_a >= nr) continue;
-      if (c.rod_b < 0 && (!world.obstacles || c.obstacle >= world.obstacles->size() ||
-                          world.obstacles->obstacle(c.obstacle).moving))
-        continue;
-      const double ratio = -c.gap / world.rods()[c.rod_a].section().radius;
-      if (ratio > deepest) {
-        deepest = ratio;
-        worst = static_cast<int>(k);
-      }
-    }
-    if (worst >= 0) {
-      const Contact& c = contacts[worst];
-      char limit[64];
-      std::snprintf(limit, sizeof limit, " (limit %.3g r)", s.max_penetration);
-      return problem(K::kPenetration, world.rods()[c.rod_a], c.seg_a,
-                     describe_contact(world, c) + limit);
-    }
-  }
-  return GuardProblem();
 }
 
 void StepGuard::reset(const World& world) {
@@ -257,8 +158,16 @@ void StepGuard::rollback(World* world) {
 }
 
 GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const {
-  GuardProblem p = check_state(world, settings_);
-  if (p.found) return p;
+  GuardProblem p;
+  const StateProblem state = check_state(world, settings_.limits);
+  if (state.found) {
+    p.found = true;
+    p.kind = guard_kind(state.check);
+    p.rod = state.rod;
+    p.item = state.item;
+    p.detail = state.detail;
+    return p;
+  }
   const WorldEnergies e = world.energies();
   *energies = e;
   if (settings_.energy_tolerance <= 0.0) return p;
@@ -370,8 +279,8 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
   e.rollback_to = world.time();
   const bool threw = p.detail.rfind("the step threw", 0) == 0;
   // bdf2 is implicit too: it halves its step, and the fallback stays implicit_euler.
-  const bool explicit_method = !kHaveImplicit || !is_implicit(integrator_);
-  const bool allow_implicit = settings_.allow_implicit && kHaveImplicit;
+  const bool explicit_method = !is_implicit(integrator_);
+  const bool allow_implicit = settings_.allow_implicit;
   if (trial_) {
     // The user's setting failed again: back to the one that worked, and wait longer next time.
     trial_ = false;
@@ -379,17 +288,15 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
     integrator_ = saved_integrator_;
     halvings_ = saved_halvings_;
     relax_after_ *= 2.0;
-    e.action = kHaveImplicit && integrator_ == kImplicit && explicit_method
-                   ? GuardEvent::Action::kImplicit
-                   : GuardEvent::Action::kHalveStep;
+    e.action = integrator_ == kImplicit && explicit_method ? GuardEvent::Action::kImplicit
+                                                           : GuardEvent::Action::kHalveStep;
   } else {
     bool halve = !threw && halvings_ < settings_.max_halvings;
     if (halve && explicit_method && allow_implicit) {
       // Halving cannot help when even the last allowed halving stays above the explicit limit,
       // linearised about the state the world went back to (a collapsed or crumpled rod's limit
       // can be far below its straight one's).
-      double limit = 1e300;
-      for (const Rod& rod : world.rods()) limit = std::min(limit, state_critical_time_step(rod));
+      const double limit = explicit_step_limit(world, true).time_step;
       if (user_h_ / std::ldexp(1.0, settings_.max_halvings) > limit) halve = false;
     }
     if (halve) {

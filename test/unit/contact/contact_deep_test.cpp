@@ -101,18 +101,19 @@ TEST(ContactDeep, GuardRefusesGrossPenetrationOfStaticObstacle) {
   ASSERT_NE(s.world.contacts(), nullptr);
   const ContactStats& st = s.world.contacts()->stats();
   EXPECT_NEAR(st.max_penetration, 0.013, 1e-3);  // axis 1 cm below the top face, r = 3 mm
-  const GuardProblem p = check_state(s.world, GuardSettings());
+  const StateProblem p = check_state(s.world, GuardSettings().limits);
   ASSERT_TRUE(p.found);
-  EXPECT_EQ(p.kind, GuardEvent::Kind::kPenetration);
+  EXPECT_EQ(p.check, StateCheck::kPenetration);
   EXPECT_EQ(p.rod, "cable");
   EXPECT_NE(p.detail.find("'block'"), std::string::npos) << p.detail;
-  GuardSettings off;
+  EXPECT_NE(p.detail.find("(limit 0.5 r)"), std::string::npos) << p.detail;  // the documented text
+  StateLimits off;
   off.max_penetration = 0.0;
   EXPECT_FALSE(check_state(s.world, off).found);
 
   Scene m = inside_box(true);
   m.world.step();
-  EXPECT_FALSE(check_state(m.world, GuardSettings()).found);
+  EXPECT_FALSE(check_state(m.world, GuardSettings().limits).found);
   const std::string report = deep_contact_report(m.world, 0.1);
   EXPECT_NE(report.find("'block'"), std::string::npos) << report;
   EXPECT_NE(report.find("cable"), std::string::npos) << report;

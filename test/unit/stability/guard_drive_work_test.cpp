@@ -230,8 +230,8 @@ TEST(GuardDriveWork, ExplicitBlowUpOfADrivenRodIsCaughtByTheEnergyCheck) {
     World& w = s.world;
     w.time_step = 1.5 * critical_time_step(w.rods()[0]);
     GuardSettings gs;
-    gs.max_speed = gs.max_angular_speed = 1e300;
-    gs.max_stretch = gs.max_compression = 0.0;
+    gs.limits.max_speed = gs.limits.max_angular_speed = 1e300;
+    gs.limits.max_stretch = gs.limits.max_compression = 0.0;
     gs.check_every = 16;
     StepGuard guard(gs);
     guard.reset(w);
