@@ -5,10 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "corde_sim/scene/scene.h"
 #include "dynamics_util.h"
 
 namespace corde {
@@ -159,6 +162,43 @@ TEST(Simulation, CommandsSinceTheSnapshotAreReplayedAfterARollback) {
   ASSERT_GE(count(events, SimulationEvent::Kind::kGuard), 1);
   EXPECT_NE(events.front().text.find("injected failure"), std::string::npos) << events.front().text;
   EXPECT_TRUE(sim.take_events().empty());  // taken
+}
+
+// Goals since the snapshot survive a rollback that the state checks ask for: two goals sent to
+// the rostests' rope's grasp, then a NaN put into the rope once (as a blow-up would) sends the
+// world back to before both. The driver applies them again at their times and the rope ends where
+// the last goal put it; the grasps alone, as restored, would have forgotten them (frames_errors
+// rostest: the rope stayed where it was).
+TEST(Simulation, GoalsSinceTheSnapshotSurviveARollbackFromANonFiniteState) {
+  const Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
+  Simulation sim;
+  sim.install(s.world);
+  const GraspSpec& spec = s.grasps.at(0);
+  int rod = 0, seg = 0;
+  ASSERT_EQ(sim.grasps().check(sim.world(), spec, &rod, &seg), "");
+  const Eigen::Isometry3d start = segment_pose(sim.world().rods()[rod], seg);
+  ASSERT_EQ(sim.grasps().add(sim.world(), spec, start, nullptr, sim.world().time()), "");
+  sim.mark_good();
+  bool faulted = false;
+  sim.set_obstacle_mover([&faulted](World* w, double) {
+    if (faulted || w->time() < 0.01) return;
+    faulted = true;
+    w->rods()[0].velocities()[3].x() = std::nan("");
+  });
+  Eigen::Isometry3d goal = start;
+  ASSERT_TRUE(sim.advance(2));
+  goal.translation() = Vec3(0.45, 0.0, 1.0);
+  sim.submit(Command::goal(sim.world().time(), spec.name, goal, 0.05));
+  ASSERT_TRUE(sim.advance(18));
+  goal.translation() = Vec3(0.4, 0.0, 1.02);
+  sim.submit(Command::goal(sim.world().time(), spec.name, goal, 0.05));
+  ASSERT_TRUE(sim.advance(2000));
+  ASSERT_TRUE(faulted);
+  ASSERT_FALSE(sim.guard().events().empty());
+  EXPECT_EQ(sim.guard().events().front().kind, GuardEvent::Kind::kNonFinite);
+  EXPECT_EQ(sim.guard().events().front().rollback_to, 0.0);
+  const Vec3 end = segment_pose(sim.world().rods()[rod], seg).translation();
+  EXPECT_LT((end - goal.translation()).norm(), 1e-6) << end.transpose();
 }
 
 TEST(Simulation, QueueStaysBoundedWhileTimeStandsStill) {
