@@ -54,25 +54,22 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "node to publish /clock; stamps are that clock's time at start-up plus simulation "
         "time");
 
-  holder_limits_.max_speed = params_.holder_max_speed;
-  holder_limits_.max_acceleration = params_.holder_max_acceleration;
-  holder_limits_.max_angular_speed = params_.holder_max_angular_speed;
-  holder_limits_.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  // The holder limits are the driver's configuration: kept across scene installs and rollbacks,
+  // changed by dynamic_reconfigure only (apply_reconfigure).
+  corde::HolderLimits holder_limits;
+  holder_limits.max_speed = params_.holder_max_speed;
+  holder_limits.max_acceleration = params_.holder_max_acceleration;
+  holder_limits.max_angular_speed = params_.holder_max_angular_speed;
+  holder_limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  sim_.set_holder_limits(holder_limits);
   corde::GuardSettings guard_settings;
   guard_settings.limits.max_speed = params_.max_node_speed;
   guard_settings.limits.max_angular_speed = params_.max_angular_speed;
   guard_.set_settings(guard_settings);
-  guard_.set_hooks(
-      [this] {
-        guard_grasps_ = grasps_;
-        grasp_commands_.clear();
-      },
-      [this] {
-        grasps_ = guard_grasps_;
-        grasps_.limits = holder_limits_;  // configuration: never taken back by a rollback
-        grasp_commands_.rewind();         // the inputs since the snapshot are not lost
-      });
-  step_fn_ = [this](corde::World* w) { step_once(w); };
+  sim_.set_obstacle_mover([this](corde::World* w, double h) {
+    if (!robot_.empty()) robot_.before_step(w->obstacles.get(), h);
+  });
+  sim_.set_step_observer([this](const corde::World& w) { watch_contacts(w); });
   corde::Scene scene;
   std::string resolve_error;
   const std::string scene_file = resolve_scene(params_.scene, &resolve_error);
@@ -218,23 +215,16 @@ std::string SimNode::margin_text() const {
 
 void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &limiting_rod_); }
 
-void SimNode::step_once(corde::World* world) {
-  const double h = world->time_step;  // the guard's, while it runs a halved step
-  if (grasp_commands_.pending() > 0) grasp_commands_.replay(grasps_, *world, world->time(), h);
-  if (!scripted_.empty()) drive_scripted(world, world->time(), h);
-  if (!grasps_.empty()) grasps_.before_step(*world, world->time(), h);
-  if (!robot_.empty()) robot_.before_step(world->obstacles.get(), h);
-  world->step();
-  if (!grasps_.empty()) grasps_.after_step(*world, h);
-  if (const corde::ContactSystem* c = world->contacts()) {
+void SimNode::watch_contacts(const corde::World& world) {
+  if (const corde::ContactSystem* c = world.contacts()) {
     max_penetration_since_state_ =
         std::max(max_penetration_since_state_, c->stats().max_penetration);
     // A deep contact (a cable pinched between links, a link moved into it): named, not launched.
     const double ratio = c->stats().max_ratio;
-    if (ratio > world->contact.deep_penetration && ratio > deepest_ratio_since_state_) {
+    if (ratio > world.contact.deep_penetration && ratio > deepest_ratio_since_state_) {
       deepest_ratio_since_state_ = ratio;
       deepest_contact_since_state_ =
-          corde::deep_contact_report(*world, world->contact.deep_penetration, 2);
+          corde::deep_contact_report(world, world.contact.deep_penetration, 2);
     }
   }
 }
@@ -243,9 +233,6 @@ long SimNode::run_steps(long n, double deadline) {
   const double t0 = wall_seconds();
   const double c0 = thread_cpu_seconds();
   long k = 0;
-  scripted_.clear();  // keeps its capacity
-  for (auto& kv : wiring_)
-    if (kv.second.scripted) scripted_.emplace_back(&kv.first, &kv.second);
   // The deadline is checked after the first step, then every 8 steps while steps are fast, and
   // after every step once they are slow (over 50 us): a batch overruns it by one step at most.
   bool slow = false;
@@ -255,8 +242,9 @@ long SimNode::run_steps(long n, double deadline) {
       if (now > deadline) break;
       slow = now - t0 > 5e-5 * static_cast<double>(k);
     }
-    if (!guard_.step(&world_, 1, step_fn_)) break;
+    if (!sim_.advance(1)) break;
   }
+  report_guard_events();  // (scripts taking hold or letting go: the layout follows)
   const double dt = wall_seconds() - t0;
   step_cpu_total_ += thread_cpu_seconds() - c0;
   refresh_if_grasps_changed();
@@ -323,7 +311,7 @@ void SimNode::refresh_if_grasps_changed() {
 
 bool SimNode::settle_guard() {
   const double t = sim_time();
-  const bool ok = !guard_.failed() && guard_.settle(&world_, step_fn_);
+  const bool ok = sim_.settle();
   // After giving up the world is back at its last good state: the clock keeps going forward.
   if (!ok && sim_time() < t) time_offset_ = t - world_.time();
   report_guard_events();
@@ -331,10 +319,19 @@ bool SimNode::settle_guard() {
 }
 
 void SimNode::report_guard_events() {
-  if (guard_.events_total() == guard_events_seen_) return;
-  const std::vector<corde::GuardEvent> events = guard_.events_since(guard_events_seen_);
-  guard_events_seen_ = guard_.events_total();
-  for (const corde::GuardEvent& e : events) {
+  for (const corde::SimulationEvent& event : sim_.take_events()) {
+    if (event.kind == corde::SimulationEvent::Kind::kTookHold ||
+        event.kind == corde::SimulationEvent::Kind::kLetGo) {
+      layout_changed_ = true;
+      continue;
+    }
+    if (event.kind == corde::SimulationEvent::Kind::kCannotHold) {
+      ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' cannot take hold at t = %g s: %s",
+                        event.grasp.c_str(), event.time, event.text.c_str());
+      continue;
+    }
+    if (event.kind != corde::SimulationEvent::Kind::kGuard) continue;
+    const corde::GuardEvent& e = event.guard;
     // Times in the node's clock.
     const double offset = time_offset_;
     char when[64];
@@ -363,7 +360,7 @@ std::string SimNode::restart_guard() {
   if (guard_.failed())
     note = "; the simulation had stopped (stability guard: " + last_problem_ + ") and resumes";
   report_guard_events();
-  guard_.reset(world_);  // snapshots world_ and grasps_
+  sim_.restart_guard();  // snapshots the world, the grasps and the scripts
   return note;
 }
 

@@ -1,6 +1,7 @@
 // SimNode: scenes, grasps and their inputs (pose, wrench and twist-rate topics, tf frames).
 // Callbacks check a message and queue it as an InputEvent (command_queue.h); the loop applies it
-// (apply_input) to the library's GraspSet before its next batch of steps.
+// (apply_input) before its next batch of steps, as a time-stamped command of the simulation
+// driver (corde::Simulation::submit), which takes effect at the start of the next step.
 #include <ros/package.h>
 #include <sys/stat.h>
 
@@ -90,24 +91,21 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
         "corde_sim: scene: mode: statics is for corde_run; the node runs the scene (use "
         "initial_state: equilibrium to start it at rest in equilibrium)");
   for (const std::string& n : scene.notes) ROS_INFO("corde_sim: scene: %s", n.c_str());
-  grasps_.clear();
+  // Whether the guard had stopped the old world (the reply says that the new one resumes).
+  guard_note_ = restart_guard();
   // Topics of grasps the new scene has too stay subscribed (a reset does not make publishers
   // reconnect); the others end.
   for (auto it = wiring_.begin(); it != wiring_.end();) {
     const bool kept = std::any_of(scene.grasps.begin(), scene.grasps.end(),
                                   [&](const corde::GraspSpec& g) { return g.name == it->first; });
-    if (kept) {  // add_grasp starts its script again from the new scene
-      it->second.scripted = false;
-      it->second.script.reset();
-    }
+    if (kept) it->second.scripted = false;  // add_grasp starts its script again
     it = kept ? std::next(it) : wiring_.erase(it);
   }
-  world_ = scene.world;
-  install_robot();  // the robot's links join the new world's obstacles
+  sim_.install(scene.world);  // no grasps, scripts or commands; the holder limits stay
+  install_robot();            // the robot's links join the new world's obstacles
   initial_ = std::move(scene);
   scene_path_ = path;
   settings_ = settings_from_world(world_);
-  grasps_.limits = holder_limits_;
   for (const corde::GraspSpec& spec : initial_.grasps) {
     auto p = params_.grasps.find(spec.name);
     const GraspSource source = p == params_.grasps.end() ? GraspSource::kTopic : p->second.source;
@@ -116,7 +114,7 @@ std::string SimNode::install_scene(corde::Scene scene, const std::string& path) 
     const std::string e = add_grasp(spec, source, frame, /*from_scene=*/true, &segment);
     if (!e.empty()) ROS_WARN("corde_sim: scene grasp not made: %s", e.c_str());
   }
-  guard_note_ = restart_guard();
+  sim_.restart_guard();  // the grasps made are the state to go back to
   refresh_layout();
   return "";
 }
@@ -181,7 +179,6 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
   w.snap = param.snap;
   w.last_input_time = -1.0;
   w.scripted = false;
-  w.script.reset();
   const bool timed = spec.grasp_time > 0.0 || std::isfinite(spec.release_time);
   if (from_scene && (spec.motion || timed)) {
     if (source == GraspSource::kTf && attached) {
@@ -193,13 +190,7 @@ std::string SimNode::add_grasp(const corde::GraspSpec& spec, GraspSource source,
     } else {
       w.scripted = true;
       w.script_spec = spec;
-      if (corde::grasp_holds(spec, world_.time(), 0.0)) {
-        w.script = corde::holder_motion(spec, segment_start);
-        w.script_start = segment_start;
-        w.script_offset_inv = grasps_.find(spec.name)->grasp.offset.inverse();
-      } else {
-        grasps_.release(world_, spec.name);  // it takes hold at grasp_time
-      }
+      sim_.add_script(spec, corde::ScriptDrive::kHolder);  // lets go until grasp_time
       char until[64] = "";
       if (std::isfinite(spec.release_time))
         std::snprintf(until, sizeof until, ", lets go at t = %g s", spec.release_time);
@@ -227,50 +218,11 @@ bool SimNode::forget_grasp(const std::string& name) {
   return true;
 }
 
-void SimNode::drive_scripted(corde::World* world, double t, double h) {
-  for (const auto& s : scripted_) {
-    GraspWiring& w = *s.second;
-    const corde::GraspSpec& spec = w.script_spec;
-    const corde::GraspState* g = grasps_.find(*s.first);
-    if (!g) continue;
-    const bool holds = corde::grasp_holds(spec, t, h);
-    if (!holds) {
-      // Before grasp_time, or let go at release_time: the segment keeps its velocity.
-      if (g->held && grasps_.release(*world, *s.first)) layout_changed_ = true;
-      continue;
-    }
-    if (!g->held) {
-      // Takes hold where the segment is now (nothing jumps); the keyframes start from there.
-      int rod = -1, seg = -1;
-      const std::string error = grasps_.check(*world, spec, &rod, &seg);
-      if (!error.empty()) {
-        ROS_WARN_THROTTLE(2.0, "corde_sim: grasp '%s' cannot take hold at t = %g s: %s",
-                          s.first->c_str(), t, error.c_str());
-        continue;
-      }
-      const Eigen::Isometry3d start = corde::segment_pose(world->rods()[rod], seg);
-      grasps_.attach(*world, *s.first, start, nullptr, t);
-      w.script = corde::holder_motion(spec, start);
-      w.script_start = start;
-      w.script_offset_inv = Eigen::Isometry3d::Identity();  // the holder is the segment's pose
-      layout_changed_ = true;
-    }
-    // Past the last keyframe the goal stays where the last call put it: the holder settles there
-    // and costs nothing more.
-    if (!w.script || t - spec.grasp_time >= w.script->end_time()) continue;
-    const Eigen::Isometry3d pose = w.script->pose_at(t + h - spec.grasp_time, w.script_start);
-    grasps_.set_goal(*s.first, t, pose * w.script_offset_inv, h);
-  }
-}
-
 void SimNode::end_script(const std::string& name, const char* what) {
   auto w = wiring_.find(name);
   if (w == wiring_.end() || !w->second.scripted) return;
   w->second.scripted = false;
-  w->second.script.reset();
-  // A rollback to before this point would bring back grasps_ but not the script: a take-hold or
-  // release the script did since would be lost (held never, or held for good).
-  guard_.mark_good(world_);
+  sim_.end_script(name);  // the state to go back to, as the script has ended
   ROS_INFO(
       "corde_sim: grasp '%s' %s: its scene keyframes (and grasp or release time) no longer drive "
       "it (t = %.3f s)",
@@ -278,11 +230,7 @@ void SimNode::end_script(const std::string& name, const char* what) {
 }
 
 bool SimNode::waiting_to_take_hold(const std::string& name) const {
-  auto w = wiring_.find(name);
-  const corde::GraspState* g = grasps_.find(name);
-  if (!g || g->held || w == wiring_.end() || !w->second.scripted) return false;
-  // As corde::grasp_holds(): the step starting within half a step of release_time lets go.
-  return world_.time() < w->second.script_spec.release_time - 0.5 * world_.time_step;
+  return sim_.waiting_to_take_hold(name);
 }
 
 void SimNode::wire_grasp(const std::string& name, GraspWiring* w) {
@@ -583,7 +531,7 @@ void SimNode::apply_input(const InputEvent& e) {
           last < 0.0 ? kFirstInputGlide : ros_to_sim_interval(e.input_time - last);
       last = e.input_time;
       if (w->second.scripted) end_script(e.grasp, "follows its pose input from now on");
-      grasp_commands_.set_goal(grasps_, e.grasp, world_.time(), e.pose, interval);
+      sim_.submit(corde::Command::goal(world_.time(), e.grasp, e.pose, interval));
       break;
     }
     case InputEvent::Kind::kFrame: {
@@ -595,22 +543,22 @@ void SimNode::apply_input(const InputEvent& e) {
         end_script(e.grasp, ("follows tf frame '" + wr.frame + "' from now on").c_str());
       if (!wr.attached) {
         grasps_.attach(world_, e.grasp, e.pose, wr.snap ? &wr.offset : nullptr, world_.time());
-        guard_.mark_good(world_);  // a rollback goes back to the attached grasp, not before it
+        sim_.mark_good();  // a rollback goes back to the attached grasp, not before it
         wr.attached = true;
         ROS_INFO("corde_sim: grasp '%s' now follows frame '%s'", e.grasp.c_str(), wr.frame.c_str());
       } else {
         const double interval = wr.last_input_time < 0.0 ? 0.0 : e.input_time - wr.last_input_time;
-        grasp_commands_.set_goal(grasps_, e.grasp, world_.time(), e.pose,
-                                 ros_to_sim_interval(interval));
+        sim_.submit(
+            corde::Command::goal(world_.time(), e.grasp, e.pose, ros_to_sim_interval(interval)));
       }
       wr.last_input_time = e.input_time;
       break;
     }
     case InputEvent::Kind::kWrench:
-      grasp_commands_.set_wrench(grasps_, world_, e.grasp, e.force, e.torque);
+      sim_.submit(corde::Command::wrench(world_.time(), e.grasp, e.force, e.torque));
       break;
     case InputEvent::Kind::kTwistRate:
-      grasp_commands_.set_twist_rate(grasps_, world_, e.grasp, e.rate);
+      sim_.submit(corde::Command::twist_rate(world_.time(), e.grasp, e.rate));
       break;
   }
 }
@@ -653,7 +601,7 @@ void SimNode::check_holders_and_strain() {
       end_script(nearest, "slipped");
       // As a release by service: a rollback must not hold the segment again (grasps_ goes back
       // with the world), the node having said that it slipped.
-      guard_.mark_good(world_);
+      sim_.mark_good();
       ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
                strain_warning_.c_str());
       refresh_layout();

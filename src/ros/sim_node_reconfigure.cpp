@@ -25,9 +25,10 @@ void SimNode::apply_reconfigure(const NodeConfig& c) {
   params_.marker_min_diameter = c.marker_min_diameter;
   params_.holder_max_speed = c.holder_max_speed;
   params_.holder_max_acceleration = c.holder_max_acceleration;
-  holder_limits_.max_speed = c.holder_max_speed;
-  holder_limits_.max_acceleration = c.holder_max_acceleration;
-  grasps_.limits = holder_limits_;
+  corde::HolderLimits limits = sim_.holder_limits();  // configuration: never rolled back
+  limits.max_speed = c.holder_max_speed;
+  limits.max_acceleration = c.holder_max_acceleration;
+  sim_.set_holder_limits(limits);
   ROS_INFO(
       "corde_sim: reconfigured: real_time_factor %g, tf/marker/state rates %g/%g/%g Hz, markers "
       "%s%s, holder limits %g m/s, %g m/s^2",

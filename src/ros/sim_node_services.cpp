@@ -480,7 +480,7 @@ bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
   res.message = "grasp '" + req.name + "' holds segment " + std::to_string(segment) + " of rod '" +
                 req.rod + "' (source " + to_string(source) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  guard_.mark_good(world_);  // a rollback goes back to the grasp, not to before it
+  sim_.mark_good();  // a rollback goes back to the grasp, not to before it
   bump_time();
   refresh_layout();
   return true;
@@ -521,7 +521,7 @@ void SimNode::release(Release::Request& req, Release::Response& res) {
   res.message = "released grasp '" + req.name + "'";
   if (forget_grasp(req.name)) res.message += " (made through ~grasp: its topics end)";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  guard_.mark_good(world_);
+  sim_.mark_good();
   bump_time();
   refresh_layout();
 }

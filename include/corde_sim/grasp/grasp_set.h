@@ -3,9 +3,9 @@
 // tangent, can push it with a wrench, and measures the wrench the rod exerts on the holder (what
 // a force-torque sensor in the gripper would read).
 //
-// Per step: before_step() moves the holders and drives the held segments, World::step() steps,
-// after_step() accumulates the reactions. Every time argument is the world's own time
-// (World::time()), which before_step() also gets.
+// Per step: before_step() moves the holders (within the caller's limits) and drives the held
+// segments, World::step() steps, after_step() accumulates the reactions. Every time argument is the
+// world's own time (World::time()), which before_step() also gets.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -44,8 +44,6 @@ struct GraspState {
 
 class GraspSet {
  public:
-  HolderLimits limits;
-
   // "" if the spec can be grasped in `world` (its rod exists, the place is on it, no boundary
   // condition holds the segment's nodes or orientation, and no other held grasp holds that
   // segment or a neighbour sharing one of its nodes, which would leave two holders driving one
@@ -82,8 +80,10 @@ class GraspSet {
   // Every holder stops where it is (after the state was restored from a snapshot).
   void stop_all();
 
-  // Around World::step() (from t to t + h). Allocate nothing.
-  void before_step(World& world, double t, double h);
+  // Around World::step() (from t to t + h), the holders moving within `limits`. The limits are
+  // the caller's configuration, not part of the set: a set restored from a snapshot keeps
+  // following the limits set since. Allocate nothing.
+  void before_step(World& world, double t, double h, const HolderLimits& limits);
   void after_step(const World& world, double h);
 
   // Mean reaction since the last call in the frame of the holder's current pose (holder_pose(),

@@ -38,7 +38,6 @@
 #include "corde_sim/Step.h"
 #include "corde_sim/WorldState.h"
 #include "corde_sim/grasp/grasp.h"
-#include "corde_sim/grasp/grasp_commands.h"
 #include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/ros/command_queue.h"
 #include "corde_sim/ros/configure.h"
@@ -52,6 +51,7 @@
 #include "corde_sim/ros/service_threads.h"
 #include "corde_sim/ros/tf_input.h"
 #include "corde_sim/scene/scene.h"
+#include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/step_guard.h"
 
 namespace corde_sim {
@@ -68,17 +68,11 @@ struct GraspWiring {
   int marker_id = 0;
   double last_input_time = -1.0;  // ROS time of the last pose input (s), for its interval
   // A scene grasp with keyframes (GraspSpec::motion), grasp_time or release_time is "scripted":
-  // it takes hold and lets go at those times and its holder follows the keyframes, in world time
-  // (World::time()), until the grasp's first input (a pose, its tf frame, ~grasp, ~release).
-  // `script` is the holder's motion since it took hold (null: none, or not held yet); it moves the
-  // held segment's pose from `script_start` (its pose when the grasp took hold), as corde_run
-  // does; the holder is that pose times `script_offset_inv` (the inverse of the grasp's offset
-  // then).
+  // the simulation driver takes hold and lets go at those times and moves its holder along the
+  // keyframes (corde::ScriptDrive::kHolder) until the grasp's first input (a pose, its tf frame,
+  // ~grasp, ~release). `scripted` mirrors the driver's state for the node's replies.
   bool scripted = false;
   corde::GraspSpec script_spec;
-  std::shared_ptr<const corde::Motion> script;
-  Eigen::Isometry3d script_start = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d script_offset_inv = Eigen::Isometry3d::Identity();
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
   ros::Publisher reaction_pub;
 };
@@ -113,14 +107,8 @@ class SimNode {
   void load_robot();
   void install_robot();
   void update_robot();
-  // Scripted grasps: takes hold or lets go when the step from t is the one nearest grasp_time or
-  // release_time (corde::grasp_holds(); the state is in the world and grasps_, so a guard's
-  // rollback and replay do it again), and sets each holder's goal to the keyframes' pose at t + h,
-  // reached at t + h (the holder limits still apply). Allocates nothing but when taking hold.
-  void drive_scripted(corde::World* world, double t, double h);
   // An input for grasp `name` arrived, or it was let go (`what`: "grasp '<name>' <what>"): its
-  // keyframes stop moving it (logged once, at INFO). The state then becomes the guard's state to
-  // go back to: its snapshot does not hold the scripted flags.
+  // keyframes stop moving it (logged once, at INFO); the state becomes the one to go back to.
   void end_script(const std::string& name, const char* what);
   // Whether grasp `name` is scripted, not held and its script will still take hold (before its
   // grasp_time, or unable to take hold yet): not one its script already let go.
@@ -134,6 +122,8 @@ class SimNode {
   void drain_commands();
   // No command is applied from now on: callers still waiting (a ~step included) return.
   void close_commands();
+  // (loop) A grasp input, checked against its grasp (held, stamp order, tf source), becomes a
+  // command of the driver at the current world time (corde::Simulation::submit).
   void apply_input(const InputEvent& e);
   // Runs `fn` in the loop thread and waits (a service thread); false when the node shuts down.
   bool in_loop(const std::function<void()>& fn);
@@ -187,12 +177,13 @@ class SimNode {
   // 64 steps within), rolls back and retries; this reports its new events (log, diagnostics) and
   // returns false while it has given up (the world then stays at its last good state).
   bool settle_guard();
+  // Reports the driver's events: the guard's (log, diagnostics) and the scripts' (layout).
   void report_guard_events();
   // A new world (start-up, reset, configure): the guard starts over from it. Returns what to add
   // to the service's message when the guard had given up before ("" otherwise).
   std::string restart_guard();
-  // One step of world_.time_step with the node's inputs (scripted and held grasps, robot links).
-  void step_once(corde::World* world);
+  // After each step (inside the guard): the contacts for rod_state and the diagnostics.
+  void watch_contacts(const corde::World& world);
   void publish_due(double now);
   void publish_reactions();
   void publish_tf();
@@ -215,13 +206,14 @@ class SimNode {
   NodeParams params_;
   std::string scene_path_;
   corde::Scene initial_;  // the scene as loaded, for ~reset
-  corde::World world_;
-  corde::GraspSet grasps_;
-  // The holder limits as configured (parameters, dynamic_reconfigure): put into grasps_ at every
-  // scene install and after every rollback of the guard, whose snapshot of grasps_ may be older.
-  corde::HolderLimits holder_limits_;
+  // The simulation driver: world, guard, grasps, scripts, the holder limits (configuration,
+  // outside the guard's snapshot) and the commands since the snapshot (replayed after a
+  // rollback); the node feeds it from the command queue and reads its state.
+  corde::Simulation sim_;
+  corde::World& world_ = sim_.world();
+  corde::GraspSet& grasps_ = sim_.grasps();
+  corde::StepGuard& guard_ = sim_.guard();
   std::map<std::string, GraspWiring> wiring_;
-  std::vector<std::pair<const std::string*, GraspWiring*>> scripted_;  // run_steps' list
   bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
   // The one way in (command_queue.h); the loop applies it in drain_commands().
   CommandQueue commands_;
@@ -235,11 +227,6 @@ class SimNode {
     double answer_by = 0.0;  // steady-clock s
   };
   std::unique_ptr<StepCall> step_call_;
-  corde::StepGuard guard_;
-  corde::GraspSet guard_grasps_;  // the grasps' holders at the guard's snapshot
-  // Inputs applied since the guard's snapshot, applied again after a rollback.
-  corde::GraspCommandLog grasp_commands_;
-  corde::StepGuard::StepFn step_fn_;
   SimSettings settings_;
   int next_marker_id_ = 0;
 
@@ -261,8 +248,7 @@ class SimNode {
   double step_time_us_ = 0.0, measured_rtf_ = 0.0;
   bool lagging_ = false, rtf_initialised_ = false;
   int recoveries_ = 0, recoveries_reported_ = 0;  // guard detections (all recovered or not)
-  long guard_events_seen_ = 0;
-  std::string last_problem_;    // the guard's last event
+  std::string last_problem_;                      // the guard's last event
   std::string guard_note_;      // restart_guard()'s note from install_scene, for ~reset's reply
   std::string strain_warning_;  // rod strained beyond its max_strain (for diagnostics)
   double last_clock_ = -1.0, last_tf_time_ = -1.0;

@@ -90,8 +90,9 @@ void write_energy_rows(std::ostream& out, const World& world);
 // the first problem found (StateProblem::message()).
 std::string run_problem(const World& world, const RunOptions& options);
 
-// Steps the scene's world for the duration, holding each grasp where it is at the start or moving
-// it along its keyframes (GraspSpec::motion), through the stability guard (options.guard).
+// Steps the scene's world for the duration through the simulation driver (simulation.h),
+// holding each grasp where it is at the start or moving it exactly along its keyframes
+// (GraspSpec::motion, ScriptDrive::kExact), through the stability guard (options.guard).
 // Reactions are written from the first step on. Stops when the guard gives up (the world at its
 // last good state), at the first state that fails run_problem() (checked before every CSV frame,
 // and every 8 steps without the guard, so the CSV ends with the last frame that passed) or when

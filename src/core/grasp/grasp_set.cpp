@@ -174,7 +174,7 @@ void GraspSet::apply_wrenches(World& world, int rod_index) const {
   }
 }
 
-void GraspSet::before_step(World& world, double t, double h) {
+void GraspSet::before_step(World& world, double t, double h, const HolderLimits& limits) {
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (!g.held) continue;

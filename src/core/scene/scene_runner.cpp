@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "corde_sim/grasp/grasp.h"
+#include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde {
@@ -85,8 +86,7 @@ std::string run_problem(const World& world, const RunOptions& options) {
 
 RunResult run_scene(Scene* scene, const RunOptions& options) {
   using Clock = std::chrono::steady_clock;
-  World& world = scene->world;
-  const double h = world.time_step;
+  const double h = scene->world.time_step;
   const double duration = options.duration >= 0.0 ? options.duration : scene->duration;
   // In double first: duration / h can exceed any integer (undefined behaviour when converted).
   const double n = std::ceil(duration / h - 1e-9);
@@ -103,45 +103,34 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   r.every = options.every > 0
                 ? options.every
                 : static_cast<int>(std::clamp(std::round(0.01 / h), 1.0, 1e9));  // fits an int
-  // Grasps hold their segments where they take hold or move them along their keyframes (the ROS
-  // node moves them from its inputs instead); a grasp with grasp_time or release_time takes hold
-  // and lets go in the step nearest those times.
-  struct Held {
-    int rod;
-    const GraspSpec* spec;
-    Grasp grasp;
-    Eigen::Isometry3d start;
-    std::shared_ptr<const Motion> motion;
-    bool holding;
-  };
-  std::vector<Held> held;
-  auto take_hold = [&](World* w, Held* g) {
-    Rod& rod = w->rods()[g->rod];
-    g->start = segment_pose(rod, grasp_segment(rod, *g->spec));
-    g->grasp = make_grasp(rod, *g->spec, g->start);
-    g->motion = holder_motion(*g->spec, g->start);
-    g->holding = true;
-    hold(rod, g->grasp, g->start);
-  };
-  for (const GraspSpec& spec : scene->grasps) {
-    int r = 0;
-    while (world.rods()[r].name() != spec.rod) ++r;
-    held.push_back({r, &spec, Grasp(), Eigen::Isometry3d::Identity(), nullptr, false});
-    if (grasp_holds(spec, world.time(), 0.0)) take_hold(&world, &held.back());
-  }
-  auto move_holders = [&](World* w) {
-    const double t = w->time(), h = w->time_step;
-    for (Held& g : held) {
-      const bool holds = grasp_holds(*g.spec, t, h);
-      if (holds && !g.holding) take_hold(w, &g);
-      if (!holds && g.holding) {
-        release(w->rods()[g.rod], g.grasp);  // the segment keeps the velocity of the last step
-        g.holding = false;
-      }
-      if (g.holding && g.motion)
-        hold(w->rods()[g.rod], g.grasp, g.motion->pose_at(t + h - g.spec->grasp_time, g.start));
+  // The driver steps the scene's own world. Grasps hold
+  // their segments where they take hold or move them exactly along their keyframes
+  // (GraspSpec::motion; the ROS node moves them through holders from its inputs instead); a
+  // grasp with grasp_time or release_time takes hold and lets go in the step nearest those times.
+  Simulation sim(options.guard);
+  sim.attach(&scene->world);
+  for (const GraspSpec& spec : scene->grasps) sim.add_script(spec, ScriptDrive::kExact);
+  const World& world = sim.world();
+  // Deep contacts: counted every step, reported (throttled) with the rods and obstacles named.
+  double next_deep_report = -INFINITY;
+  sim.set_step_observer([&](const World& w) {
+    const ContactSystem* cs = w.contacts();
+    if (!cs || !(cs->stats().max_ratio > w.contact.deep_penetration)) return;
+    ++r.deep_contact_steps;
+    const double ratio = cs->stats().max_ratio;
+    const bool deepest = ratio > r.deepest_contact;
+    if (!deepest && !(options.on_deep_contact && w.time() >= next_deep_report)) return;
+    const std::string report = deep_contact_report(w, w.contact.deep_penetration);
+    if (deepest) {
+      r.deepest_contact = ratio;
+      r.deepest_contact_time = w.time();
+      r.deepest_contact_report = report;
     }
-  };
+    if (options.on_deep_contact && w.time() >= next_deep_report) {
+      next_deep_report = w.time() + options.deep_contact_interval;
+      options.on_deep_contact(w.time(), report);
+    }
+  });
   const bool any_output = options.csv || options.reactions || options.energies;
   const Clock::time_point start = Clock::now();
   Clock::time_point last_report = start;
@@ -163,43 +152,13 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   if (options.energies) write_energy_header(*options.energies);
   if (options.reactions) write_reaction_header(*options.reactions);
   if (any_output && r.ok) write(false);
-  StepGuard guard(options.guard);
-  // Which grasps hold goes back with the world at a rollback (their drives are in the world), so
-  // that a replay takes hold and lets go again at the scripted times.
-  std::vector<Held> saved = held;
-  guard.set_hooks([&] { saved = held; }, [&] { held = saved; });
-  guard.reset(world);
   const double t_start = world.time();
-  double next_deep_report = -INFINITY;
-  const StepGuard::StepFn step_fn = [&](World* w) {
-    move_holders(w);
-    w->step();
-    // Deep contacts: counted every step, reported (throttled) with the rods and obstacles named.
-    const ContactSystem* cs = w->contacts();
-    if (!cs || !(cs->stats().max_ratio > w->contact.deep_penetration)) return;
-    ++r.deep_contact_steps;
-    const double ratio = cs->stats().max_ratio;
-    const bool deepest = ratio > r.deepest_contact;
-    if (!deepest && !(options.on_deep_contact && w->time() >= next_deep_report)) return;
-    const std::string report = deep_contact_report(*w, w->contact.deep_penetration);
-    if (deepest) {
-      r.deepest_contact = ratio;
-      r.deepest_contact_time = w->time();
-      r.deepest_contact_report = report;
-    }
-    if (options.on_deep_contact && w->time() >= next_deep_report) {
-      next_deep_report = w->time() + options.deep_contact_interval;
-      options.on_deep_contact(w->time(), report);
-    }
-  };
-  long events_seen = 0;
   auto take_events = [&] {
-    if (guard.events_total() == events_seen) return;
-    for (const GuardEvent& e : guard.events_since(events_seen)) {
-      r.guard_events.push_back(e);
-      if (options.on_guard_event) options.on_guard_event(e);
+    for (const SimulationEvent& e : sim.take_events()) {
+      if (e.kind != SimulationEvent::Kind::kGuard) continue;
+      r.guard_events.push_back(e.guard);
+      if (options.on_guard_event) options.on_guard_event(e.guard);
     }
-    events_seen = guard.events_total();
   };
   const bool guarded = options.guard.enabled;
   r.guarded = guarded;
@@ -209,12 +168,13 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
     if (any_output) next = std::min(next, (i / r.every + 1) * r.every);
     if (!guarded) next = std::min(next, (i / 8 + 1) * 8);
     const bool frame = any_output && (next % r.every == 0 || next == steps);
-    bool good = guard.step(&world, next - i, step_fn);
+    bool good = sim.advance(next - i);
     // No frame and no end state unchecked: the guard checks them now.
-    if (good && guarded && (frame || next == steps)) good = guard.settle(&world, step_fn);
+    if (good && guarded && (frame || next == steps)) good = sim.settle();
     take_events();
     if (!good) {
       // The world is back at its last good state, a whole number of steps from the start.
+      const StepGuard& guard = sim.guard();
       r.steps = std::lround((world.time() - t_start) / h);
       r.ok = false;
       r.guard_failed = true;
@@ -246,8 +206,8 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
       }
     }
   }
-  r.guard_rollbacks = guard.rollbacks();
-  r.guard_work = guard.total_work();
+  r.guard_rollbacks = sim.guard().rollbacks();
+  r.guard_work = sim.guard().total_work();
   r.wall_seconds = wall();
   r.sim_time = world.time();
   r.energies = world.energies();

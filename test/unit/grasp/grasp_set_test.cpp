@@ -41,7 +41,7 @@ GraspSpec at_node(const std::string& name, int node) {
 
 void step(World* w, GraspSet* g, int n) {
   for (int k = 0; k < n; ++k) {
-    g->before_step(*w, w->time(), w->time_step);
+    g->before_step(*w, w->time(), w->time_step, HolderLimits());
     w->step();
     g->after_step(*w, w->time_step);
   }
@@ -85,7 +85,8 @@ TEST(GraspSet, GivenOffsetGlidesInsteadOfJumping) {
   // One step at the largest linear and angular acceleration (the node is 5 cm from the midpoint).
   const double h2 = w.time_step * w.time_step;
   EXPECT_LT((w.rods()[0].positions()[10] - before).norm(),
-            (g.limits.max_acceleration + 0.05 * g.limits.max_angular_acceleration) * h2 * 1.01);
+            (HolderLimits().max_acceleration + 0.05 * HolderLimits().max_angular_acceleration) *
+                h2 * 1.01);
   step(&w, &g, 100000);  // 1 s
   const Eigen::Isometry3d seg = segment_pose(w.rods()[0], 9);
   EXPECT_LT((seg.translation() - holder.translation()).norm(), 1e-9);

@@ -38,7 +38,7 @@ constexpr int kSteps = 5;
 
 void step(World* w, GraspSet* g, int n) {
   for (int k = 0; k < n; ++k) {
-    g->before_step(*w, w->time(), w->time_step);
+    g->before_step(*w, w->time(), w->time_step, HolderLimits());
     w->step();
     g->after_step(*w, w->time_step);
   }

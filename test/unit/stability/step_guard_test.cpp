@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "corde_sim/grasp/grasp.h"
-#include "corde_sim/grasp/grasp_commands.h"
 #include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/scene/scene_runner.h"
@@ -343,7 +342,7 @@ TEST(StepGuard, GraspPullIsWorkNotGrowth) {
     StepGuard guard;
     guard.reset(w);
     const StepGuard::StepFn fn = [&](World* world) {
-      grasps.before_step(*world, world->time(), world->time_step);
+      grasps.before_step(*world, world->time(), world->time_step, HolderLimits());
       world->step();
       grasps.after_step(*world, world->time_step);
     };
@@ -355,96 +354,6 @@ TEST(StepGuard, GraspPullIsWorkNotGrowth) {
     for (const GuardEvent& e : guard.events()) ADD_FAILURE() << e.message();
     EXPECT_LT((segment_pose(w.rods()[rod], seg).translation() - goal.translation()).norm(), 1e-6);
   }
-}
-
-// Inputs since the snapshot survive a rollback: two goals sent to a grasp, then a fault (a NaN
-// put into the rope once, as a blow-up would) that sends the world back to before both. The
-// command log applies them again at their times, and the rope ends where the last goal put it;
-// the grasps alone, as restored, would have forgotten them (frames_errors rostest, CI of stop
-// 15: the rope stayed where it was).
-TEST(StepGuard, RollbackKeepsTheInputsSinceTheSnapshot) {
-  for (bool with_log : {true, false}) {
-    SCOPED_TRACE(with_log);
-    Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
-    World& w = s.world;
-    GraspSet grasps, saved;
-    GraspCommandLog log;
-    const GraspSpec& spec = s.grasps.at(0);
-    const int rod = 0, seg = grip(&s, &grasps);
-    StepGuard guard;
-    guard.set_hooks(
-        [&] {
-          saved = grasps;
-          log.clear();
-        },
-        [&] {
-          grasps = saved;
-          if (with_log) log.rewind();
-        });
-    guard.reset(w);
-    bool faulted = false;
-    const StepGuard::StepFn fn = [&](World* world) {
-      log.replay(grasps, *world, world->time(), world->time_step);
-      grasps.before_step(*world, world->time(), world->time_step);
-      world->step();
-      grasps.after_step(*world, world->time_step);
-      if (!faulted && world->time() >= 0.01) {
-        faulted = true;
-        world->rods()[0].velocities()[3].x() = std::nan("");
-      }
-    };
-    const Eigen::Isometry3d start = segment_pose(w.rods()[rod], seg);
-    Eigen::Isometry3d goal = start;
-    ASSERT_TRUE(guard.step(&w, 2, fn));
-    goal.translation() = Vec3(0.45, 0.0, 1.0);
-    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-    ASSERT_TRUE(guard.step(&w, 18, fn));
-    goal.translation() = Vec3(0.4, 0.0, 1.02);
-    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-    EXPECT_EQ(log.size(), 2u);
-    ASSERT_TRUE(guard.step(&w, 2000, fn));
-    ASSERT_TRUE(faulted);
-    ASSERT_FALSE(guard.events().empty());
-    EXPECT_EQ(guard.events().front().kind, Kind::kNonFinite);
-    EXPECT_EQ(guard.events().front().rollback_to, 0.0);
-    const Vec3 end = segment_pose(w.rods()[rod], seg).translation();
-    if (with_log)
-      EXPECT_LT((end - goal.translation()).norm(), 1e-6) << end.transpose();
-    else  // what the node did before the log
-      EXPECT_LT((end - start.translation()).norm(), 1e-6) << end.transpose();
-  }
-}
-
-// Inputs at one world time (a paused node, or one stopped by the guard, fed a flood of poses)
-// keep one entry per grasp and kind: the log does not grow while the time stands still, and the
-// last input is the one that acts.
-TEST(StepGuard, CommandLogKeepsOneInputPerGraspAndTime) {
-  Scene s = load_scene(std::string(CORDE_SIM_SOURCE_DIR) + "/test/ros/scenes/rope.yaml");
-  World& w = s.world;
-  GraspSet grasps;
-  GraspCommandLog log;
-  const GraspSpec& spec = s.grasps.at(0);
-  const int rod = 0, seg = grip(&s, &grasps);
-  Eigen::Isometry3d goal = segment_pose(w.rods()[rod], seg);
-  for (int k = 0; k < 10000; ++k) {
-    goal.translation().x() = 0.4 + 1e-6 * k;
-    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-    log.set_twist_rate(grasps, w, spec.name, 0.1 * k);
-  }
-  EXPECT_EQ(log.size(), 2u);
-  EXPECT_EQ(grasps.find(spec.name)->holder.goal().translation().x(), goal.translation().x());
-  EXPECT_EQ(grasps.find(spec.name)->twist_rate, 0.1 * 9999);
-  // Goals of zero duration (equal stamps) replace each other too; one of nonzero duration after
-  // one of zero starts from it, so both stay (at most two goals at one time).
-  for (int k = 0; k < 1000; ++k) {
-    log.set_goal(grasps, spec.name, w.time(), goal, 0.0);
-    log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-  }
-  EXPECT_EQ(log.size(), 3u);
-  // At another time they accumulate, as the replay needs them.
-  w.set_time(w.time() + 1e-3);
-  log.set_goal(grasps, spec.name, w.time(), goal, 0.05);
-  EXPECT_EQ(log.size(), 4u);
 }
 
 }  // namespace
