@@ -8,6 +8,7 @@
 
 #include "corde_sim/statics/statics.h"
 #include "dynamics_util.h"
+#include "grasp_test_util.h"
 
 namespace corde {
 namespace {
@@ -30,14 +31,7 @@ World example_world(int elements, double tau) {
   return w;
 }
 
-GraspSpec at_node(const std::string& name, int node) {
-  GraspSpec s;
-  s.name = name;
-  s.rod = "rod";
-  s.place = GraspSpec::Place::kNode;
-  s.value = node;
-  return s;
-}
+using corde::test::at_node;
 
 void step(World* w, GraspSet* g, int n) {
   for (int k = 0; k < n; ++k) {

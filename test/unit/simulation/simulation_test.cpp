@@ -13,6 +13,7 @@
 
 #include "corde_sim/scene/scene.h"
 #include "dynamics_util.h"
+#include "grasp_test_util.h"
 
 namespace corde {
 namespace {
@@ -31,14 +32,7 @@ World example_world() {
   return w;
 }
 
-GraspSpec at_node(const std::string& name, int node) {
-  GraspSpec s;
-  s.name = name;
-  s.rod = "rod";
-  s.place = GraspSpec::Place::kNode;
-  s.value = node;
-  return s;
-}
+using corde::test::at_node;
 
 // A guard that checks (and snapshots) every 8 steps.
 GuardSettings every_8() {
