@@ -19,7 +19,7 @@
 namespace corde {
 
 struct GraspState {
-  GraspSpec spec;  // as requested (a resample turns it into the arc length below)
+  GraspSpec spec;  // as requested (a resample turns a node place into the arc length below)
   Grasp grasp;     // rod name, segment, offset (segment pose in the holder frame)
   int rod = 0;     // index into World::rods()
   bool held = true;
@@ -93,7 +93,9 @@ class GraspSet {
   bool take_reaction(const std::string& name, Vec3* force, Vec3* torque);
 
   // After rod `rod` was resampled (its segment indices changed): every grasp on it holds the
-  // segment at its material coordinate again, the holders where they are.
+  // segment at its place again, the holders where they are: `start` and `end` the new first and
+  // last segments, an arc length the segment nearest the arc length asked for, a node the segment
+  // nearest the old segment's midpoint (its material coordinate).
   void remake_on(World& world, int rod);
 
  private:

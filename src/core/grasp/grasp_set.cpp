@@ -238,9 +238,14 @@ void GraspSet::remake_on(World& world, int rod_index) {
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (g.rod != rod_index) continue;
-    g.spec.place = GraspSpec::Place::kArcLength;
-    g.spec.value = g.arc_length;
+    // Named places keep their names: start and end are the new first and last segments, an arc
+    // length is the one asked for. Node indices change: a node becomes its segment's midpoint.
+    if (g.spec.place == GraspSpec::Place::kNode) {
+      g.spec.place = GraspSpec::Place::kArcLength;
+      g.spec.value = g.arc_length;
+    }
     g.grasp.segment = grasp_segment(rod, g.spec);
+    g.arc_length = midpoint_arc_length(rod, g.grasp.segment);
     if (g.held) {
       // Keep the holder; record the new segment's offset from it, so nothing jumps.
       const Eigen::Isometry3d holder = g.holder_pose();
