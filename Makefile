@@ -21,6 +21,9 @@ ifdef CORDE_WERROR
   CMAKE_ARGS += -DCORDE_WERROR=$(CORDE_WERROR)
 endif
 CTEST_ARGS ?=
+# The libFuzzer targets (label fuzz) are part of the project's own build and tests; CMake's
+# option CORDE_FUZZ is off by default, so that a catkin workspace's `tests` skips them.
+CORDE_FUZZ ?= ON
 BENCH_ARGS ?=
 # The main job: the node on its default scene, with rviz when a display is there (DISPLAY set).
 RUN_CMD    ?= roslaunch corde_sim corde_sim.launch headless:=$(if $(DISPLAY),false,true)
@@ -41,16 +44,20 @@ deps:
 # Configure once; afterwards `cmake --build` re-runs CMake by itself when CMakeLists.txt or a
 # globbed source folder changes.
 $(BUILD_DIR)/CMakeCache.txt:
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) \
+	  -DCORDE_FUZZ=$(CORDE_FUZZ) $(CMAKE_ARGS)
 
 configure: deps
-	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) $(CMAKE_ARGS)
+	cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DPYTHON_EXECUTABLE=$(PYTHON) \
+	  -DCORDE_FUZZ=$(CORDE_FUZZ) $(CMAKE_ARGS)
 
 # Test executables are not part of `all` (catkin's convention, so that a catkin workspace does not
 # compile them unless asked): `build` builds the `tests` target as well, so that ctest finds every
 # test; `build-main` (for run and bench) only `all`.
 build: deps
 	@$(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt
+	@grep -q '^CORDE_FUZZ:BOOL=$(CORDE_FUZZ)$$' $(BUILD_DIR)/CMakeCache.txt \
+	  || cmake -S . -B $(BUILD_DIR) -DCORDE_FUZZ=$(CORDE_FUZZ)
 	cmake --build $(BUILD_DIR) -j$(JOBS) --target all tests -- --no-print-directory
 
 build-main: deps

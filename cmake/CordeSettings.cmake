@@ -21,6 +21,12 @@ option(CORDE_WITH_ROS "Build the ROS adapter when catkin is found" ON)
 # Warnings as errors where the build must stay clean (CI sets it: scripts via CORDE_WERROR=ON).
 #catkin_lint: ignore_once global_var_collision
 option(CORDE_WERROR "Treat compiler warnings as errors" OFF)
+
+# The libFuzzer targets (test/fuzz/): clang++ compiles the library again with ASan and UBSan for
+# them, about 20 minutes on 2 cores. Off by default, so that a catkin workspace's `tests` does
+# not pay for them; the project's own `make build`/`make test` turn it on (Makefile CORDE_FUZZ).
+#catkin_lint: ignore_once global_var_collision
+option(CORDE_FUZZ "Build the libFuzzer targets with the tests and run them in ctest" OFF)
 if(CORDE_WERROR)
   add_compile_options(-Werror)
 endif()

@@ -146,20 +146,22 @@ if(CATKIN_ENABLE_TESTING)
   # The libFuzzer targets, the scene reader's and the URDF reader's (test/fuzz/README.md).
   # libFuzzer needs clang while this build may use g++, so the script compiles them with clang++
   # itself (`tests` builds them); each test fuzzes for 20 s and is skipped (exit 77) when no
-  # clang++ supports -fsanitize=fuzzer.
-  set(CORDE_FUZZ_SCRIPT ${PROJECT_SOURCE_DIR}/test/fuzz/run_fuzz_short.sh)
-  foreach(target scene urdf)
-    add_custom_target(${PROJECT_NAME}_${target}_fuzz
-      COMMAND bash ${CORDE_FUZZ_SCRIPT} ${target} ${PROJECT_SOURCE_DIR}
-              ${PROJECT_BINARY_DIR}/fuzz_${target} --build
-      VERBATIM)
-    add_dependencies(tests ${PROJECT_NAME}_${target}_fuzz)
-    add_test(NAME ${target}_fuzz_short
-      COMMAND bash ${CORDE_FUZZ_SCRIPT} ${target} ${PROJECT_SOURCE_DIR}
-              ${PROJECT_BINARY_DIR}/fuzz_${target} 20)
-    set_tests_properties(${target}_fuzz_short PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 600
-      LABELS fuzz)
-  endforeach()
+  # clang++ supports -fsanitize=fuzzer. Only with CORDE_FUZZ (CordeSettings.cmake).
+  if(CORDE_FUZZ)
+    set(CORDE_FUZZ_SCRIPT ${PROJECT_SOURCE_DIR}/test/fuzz/run_fuzz_short.sh)
+    foreach(target scene urdf)
+      add_custom_target(${PROJECT_NAME}_${target}_fuzz
+        COMMAND bash ${CORDE_FUZZ_SCRIPT} ${target} ${PROJECT_SOURCE_DIR}
+                ${PROJECT_BINARY_DIR}/fuzz_${target} --build
+        VERBATIM)
+      add_dependencies(tests ${PROJECT_NAME}_${target}_fuzz)
+      add_test(NAME ${target}_fuzz_short
+        COMMAND bash ${CORDE_FUZZ_SCRIPT} ${target} ${PROJECT_SOURCE_DIR}
+                ${PROJECT_BINARY_DIR}/fuzz_${target} 20)
+      set_tests_properties(${target}_fuzz_short PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 600
+        LABELS fuzz)
+    endforeach()
+  endif()
 
   if(catkin_FOUND AND CORDE_ROSTEST_FILES)
     find_package(rostest REQUIRED)

@@ -61,6 +61,8 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   holder_limits.max_acceleration = params_.holder_max_acceleration;
   holder_limits.max_angular_speed = params_.holder_max_angular_speed;
   holder_limits.max_angular_acceleration = params_.holder_max_angular_acceleration;
+  // A holder stalls at the strain limit unless the grasp is to slip there (~strain_action).
+  holder_limits.stall_at_max_strain = params_.strain_action != StrainAction::kSlip;
   sim_.set_holder_limits(holder_limits);
   corde::GuardSettings guard_settings;
   guard_settings.limits.max_speed = params_.max_node_speed;
@@ -323,6 +325,11 @@ void SimNode::report_guard_events() {
     if (event.kind == corde::SimulationEvent::Kind::kTookHold ||
         event.kind == corde::SimulationEvent::Kind::kLetGo) {
       layout_changed_ = true;
+      continue;
+    }
+    if (event.kind == corde::SimulationEvent::Kind::kStalled) {
+      ROS_WARN("corde_sim: grasp '%s' at t = %g s: %s", event.grasp.c_str(), event.time,
+               event.text.c_str());
       continue;
     }
     if (event.kind == corde::SimulationEvent::Kind::kCannotHold) {

@@ -10,6 +10,7 @@ import rospy
 import rostest
 
 import corde_rostest as ct
+from corde_sim.srv import ListGrasps
 
 H = 2.5e-4  # s
 NAN, INF = float("nan"), float("inf")
@@ -140,10 +141,11 @@ class Configure(unittest.TestCase):
                             "node %d" % i)
         self.assertAlmostEqual(new.kinetic_energy, old.kinetic_energy,
                                delta=0.05 * old.kinetic_energy + 1e-9)
-        # Still clamped, and the gripper still holds the segment at its place: it stays put.
-        held = int(np.argmin([np.linalg.norm(ct.segment_pose(new, k)[0] -
-                                             ct.segment_pose(old, 9)[0]) for k in range(20)]))
-        self.assertGreaterEqual(held, 18)
+        # Still clamped, and the gripper (place: end) still holds the rope's end: the new last
+        # segment (issue 24, item 5), which stays put.
+        g = self.sim.service("list_grasps", ListGrasps)()
+        held = list(g.segments)[list(g.names).index("gripper")]
+        self.assertEqual(held, 19)
         s2 = self.step(400)
         self.assertLess(np.linalg.norm(ct.segment_pose(s2.rods[0], held)[0] -
                                        ct.segment_pose(new, held)[0]), 1e-9)

@@ -19,7 +19,7 @@
 namespace corde {
 
 struct GraspState {
-  GraspSpec spec;  // as requested (a resample turns it into the arc length below)
+  GraspSpec spec;  // as requested (a resample turns a node place into the arc length below)
   Grasp grasp;     // rod name, segment, offset (segment pose in the holder frame)
   int rod = 0;     // index into World::rods()
   bool held = true;
@@ -30,6 +30,15 @@ struct GraspState {
   double arc_length = 0.0;   // rest arc length of the grasped segment's midpoint (m)
   HolderClip clip;           // limits hit since the caller last cleared it
   bool hold_pending = true;  // the drives must be set again at the next step
+  // The holder stalled at the material's strain limit (HolderLimits::stall_at_max_strain): its
+  // last motion would have stretched the cable between the held segment and node `stall_anchor`
+  // (a clamp or another grasp) to `stall_strain` (above max_strain), so it stays where it is,
+  // its goal kept, taking only motions within reach; the stall ends when the held node is nearer
+  // the anchor than `stall_distance` (where it stalled). `stall_new`: stalled since the caller
+  // last cleared it.
+  bool stalled = false, stall_new = false;
+  double stall_strain = 0.0, stall_distance = 0.0;
+  int stall_anchor = -1;
   // Reaction: force on the holder and torque about its origin, world frame, summed over steps.
   Vec3 reaction_force_sum = Vec3::Zero(), reaction_torque_sum = Vec3::Zero();
   long reaction_steps = 0;
@@ -82,8 +91,14 @@ class GraspSet {
 
   // Around World::step() (from t to t + h), the holders moving within `limits`. The limits are
   // the caller's configuration, not part of the set: a set restored from a snapshot keeps
-  // following the limits set since. Allocate nothing.
-  void before_step(World& world, double t, double h, const HolderLimits& limits);
+  // following the limits set since. With limits.stall_at_max_strain a holder whose motion over
+  // the step would stretch the cable between its held segment and the nearest held node on
+  // either side (any node drive: a clamp, another grasp, a driven node) beyond the rod's
+  // max_strain (the straight distance over the rest arc length, or the segments' own strain in
+  // between when larger, as around an obstacle), while lengthening that distance, stays where it
+  // is instead (GraspState::stalled); motions that shorten it are taken. Returns how many holders
+  // stalled in this step that had not been stalled. Allocates nothing.
+  int before_step(World& world, double t, double h, const HolderLimits& limits);
   void after_step(const World& world, double h);
 
   // Mean reaction since the last call in the frame of the holder's current pose (holder_pose(),
@@ -93,7 +108,9 @@ class GraspSet {
   bool take_reaction(const std::string& name, Vec3* force, Vec3* torque);
 
   // After rod `rod` was resampled (its segment indices changed): every grasp on it holds the
-  // segment at its material coordinate again, the holders where they are.
+  // segment at its place again, the holders where they are: `start` and `end` the new first and
+  // last segments, an arc length the segment nearest the arc length asked for, a node the segment
+  // nearest the old segment's midpoint (its material coordinate).
   void remake_on(World& world, int rod);
 
  private:

@@ -16,6 +16,11 @@ struct HolderLimits {
   double max_acceleration = 50.0;         // m/s^2
   double max_angular_speed = 20.0;        // rad/s
   double max_angular_acceleration = 1e3;  // rad/s^2
+  // A holder stalls at its material's strain limit (GraspSet::before_step): a motion that would
+  // stretch the cable beyond its material's max_strain towards the next held place along it (a
+  // clamp, another grasp) is not taken, so that a goal out of reach cannot tear the cable. False:
+  // the holder goes wherever it is sent.
+  bool stall_at_max_strain = true;
 };
 
 // Which limits clipped the motion in one advance() and left the holder behind its reference by
@@ -38,6 +43,8 @@ class HolderMotion {
   HolderClip advance(double t, double h, const HolderLimits& limits);
   // Stops where the holder is: the goal becomes the current pose.
   void stop();
+  // At rest where the holder is, the goal kept: the next advance() starts from rest towards it.
+  void halt();
 
   const Eigen::Isometry3d& pose() const { return pose_; }
   const Eigen::Isometry3d& goal() const { return goal_; }

@@ -59,6 +59,7 @@ struct SimulationEvent {
     kLetGo,        // a script (or a kRelease command) let go
     kCannotHold,   // a script could not take hold (`text` says why); it tries again next step
     kScriptEnded,  // a goal or release command ended a grasp's script (not again on a replay)
+    kStalled,      // a grasp's holder stalled at its material's strain limit (`text` says where)
   };
   Kind kind = Kind::kGuard;
   double time = 0.0;  // world time (s)
@@ -171,6 +172,7 @@ class Simulation {
   void event(SimulationEvent::Kind kind, double time, const std::string& grasp,
              std::string text = std::string());
   void take_guard_events();
+  void report_stalls(const World& w, double t);
 
   World own_;
   World* world_ = &own_;

@@ -1,5 +1,6 @@
 #include "corde_sim/grasp/grasp_set.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace corde {
@@ -10,6 +11,55 @@ double midpoint_arc_length(const Rod& rod, int segment) {
   double s = 0.0;
   for (int i = 0; i < segment; ++i) s += rod.rest_lengths()[i];
   return s + 0.5 * rod.rest_lengths()[segment];
+}
+
+// Where node k (0, 1) of the grasp's segment is held with the holder at `holder` (as hold()).
+Vec3 held_node(const Rod& rod, const Grasp& grasp, const Eigen::Isometry3d& holder, int k) {
+  const Eigen::Isometry3d pose = holder * grasp.offset;
+  const double half = 0.5 * rod.rest_lengths()[grasp.segment];
+  return pose.translation() + (k == 0 ? -half : half) * pose.linear().col(2);
+}
+
+struct Overstretch {
+  double strain = 0.0;
+  int anchor = -1;        // -1: within the limit
+  double distance = 0.0;  // from the anchor to the held node, the holder at `from`
+};
+
+// The holder moving from `from` to `to` over the step ending at t_end: on each side of the held
+// segment, the nearest held node (a node drive, where it is at t_end). A side whose distance from
+// the held node grows is overstretched when that distance over the rest arc length between them,
+// or the strain of a segment in between, exceeds `limit`.
+Overstretch overstretch(const Rod& rod, const Grasp& grasp, const Eigen::Isometry3d& from,
+                        const Eigen::Isometry3d& to, double t_end, double limit) {
+  const int s = grasp.segment;
+  const NodeDrive* anchors[2] = {nullptr, nullptr};  // below s, above s + 1
+  for (const NodeDrive& d : rod.node_drives()) {
+    if (d.node < s && (!anchors[0] || d.node > anchors[0]->node)) anchors[0] = &d;
+    if (d.node > s + 1 && (!anchors[1] || d.node < anchors[1]->node)) anchors[1] = &d;
+  }
+  Overstretch out;
+  for (int k = 0; k < 2; ++k) {
+    if (!anchors[k]) continue;
+    const Vec3 anchor = drive_position(*anchors[k], t_end);
+    const double before = (held_node(rod, grasp, from, k) - anchor).norm();
+    const double after = (held_node(rod, grasp, to, k) - anchor).norm();
+    if (!(after > before)) continue;
+    const int first = k == 0 ? anchors[k]->node : s + 1;
+    const int last = k == 0 ? s : anchors[k]->node;  // segments [first, last)
+    double arc = 0.0, strain = -INFINITY;
+    for (int i = first; i < last; ++i) {
+      arc += rod.rest_lengths()[i];
+      strain = std::max(strain, rod.stretch_strain(i));
+    }
+    strain = std::max(strain, after / arc - 1.0);
+    if (strain > limit && strain > out.strain) {
+      out.strain = strain;
+      out.anchor = anchors[k]->node;
+      out.distance = before;
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -174,7 +224,8 @@ void GraspSet::apply_wrenches(World& world, int rod_index) const {
   }
 }
 
-void GraspSet::before_step(World& world, double t, double h, const HolderLimits& limits) {
+int GraspSet::before_step(World& world, double t, double h, const HolderLimits& limits) {
+  int stalls = 0;
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (!g.held) continue;
@@ -184,14 +235,47 @@ void GraspSet::before_step(World& world, double t, double h, const HolderLimits&
     for (int k = 0; k < 2; ++k) g.x0[k] = rod.positions()[s + k];
     // A holder at rest with nothing turning leaves the drives as they are (their targets hold).
     if (!g.holder.moving() && g.twist_rate == 0.0 && !g.hold_pending) continue;
-    const HolderClip c = g.holder.advance(t, h, limits);
-    g.clip.speed |= c.speed;
-    g.clip.acceleration |= c.acceleration;
+    const double limit = rod.section().max_strain;
+    if (limits.stall_at_max_strain && limit > 0.0 && g.holder.moving()) {
+      const HolderMotion before = g.holder;
+      const Eigen::Isometry3d from = g.holder_pose();
+      const HolderClip c = g.holder.advance(t, h, limits);
+      const Overstretch o = overstretch(rod, g.grasp, from, g.holder_pose(), t + h, limit);
+      if (o.anchor >= 0) {
+        g.holder = before;  // the step's motion is not taken
+        g.holder.halt();
+        if (!g.stalled) {
+          g.stalled = g.stall_new = true;
+          g.stall_strain = o.strain;
+          g.stall_anchor = o.anchor;
+          g.stall_distance = o.distance;
+          ++stalls;
+        }
+      } else {
+        g.clip.speed |= c.speed;
+        g.clip.acceleration |= c.acceleration;
+        // The stall ends once the holder is nearer its anchor than where it stalled (creeping up
+        // to the limit from there is the same stall).
+        if (g.stalled) {
+          const NodeDrive* a = rod.node_drive(g.stall_anchor);
+          const int k = g.stall_anchor < s ? 0 : 1;
+          if (!a ||
+              (held_node(rod, g.grasp, g.holder_pose(), k) - drive_position(*a, t + h)).norm() <
+                  g.stall_distance)
+            g.stalled = false;
+        }
+      }
+    } else {
+      const HolderClip c = g.holder.advance(t, h, limits);
+      g.clip.speed |= c.speed;
+      g.clip.acceleration |= c.acceleration;
+    }
     if (g.twist_rate != 0.0)
       g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
     hold(rod, g.grasp, g.holder_pose());
     g.hold_pending = false;
   }
+  return stalls;
 }
 
 void GraspSet::after_step(const World& world, double h) {
@@ -238,9 +322,14 @@ void GraspSet::remake_on(World& world, int rod_index) {
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (g.rod != rod_index) continue;
-    g.spec.place = GraspSpec::Place::kArcLength;
-    g.spec.value = g.arc_length;
+    // Named places keep their names: start and end are the new first and last segments, an arc
+    // length is the one asked for. Node indices change: a node becomes its segment's midpoint.
+    if (g.spec.place == GraspSpec::Place::kNode) {
+      g.spec.place = GraspSpec::Place::kArcLength;
+      g.spec.value = g.arc_length;
+    }
     g.grasp.segment = grasp_segment(rod, g.spec);
+    g.arc_length = midpoint_arc_length(rod, g.grasp.segment);
     if (g.held) {
       // Keep the holder; record the new segment's offset from it, so nothing jumps.
       const Eigen::Isometry3d holder = g.holder_pose();

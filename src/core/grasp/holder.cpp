@@ -68,6 +68,11 @@ void HolderMotion::stop() {
   cached_t_ = -1e300;
 }
 
+void HolderMotion::halt() {
+  v_.setZero();
+  w_.setZero();
+}
+
 void HolderMotion::reference(double t, Vector3d* p, Quaterniond* q) const {
   if (!(duration_ > 0.0) || t >= t0_ + duration_) {
     *p = p_goal_;

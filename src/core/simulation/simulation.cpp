@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <stdexcept>
 
@@ -311,7 +312,7 @@ void Simulation::step_once(World* w) {
     applied_high_ = std::max(applied_high_, next_);
   }
   if (!scripts_.empty()) drive_scripts(w, t, h);
-  if (!grasps_.empty()) grasps_.before_step(*w, t, h, holder_limits_);
+  if (!grasps_.empty() && grasps_.before_step(*w, t, h, holder_limits_) > 0) report_stalls(*w, t);
   if (mover_) mover_(w, h);
   w->step();
   if (!grasps_.empty()) grasps_.after_step(*w, h);
@@ -357,6 +358,23 @@ void Simulation::event(SimulationEvent::Kind kind, double time, const std::strin
   e.grasp = grasp;
   e.text = std::move(text);
   events_.push_back(std::move(e));
+}
+
+void Simulation::report_stalls(const World& w, double t) {
+  for (const auto& kv : grasps_.grasps()) {
+    if (!kv.second.stall_new) continue;
+    GraspState& g = *grasps_.find(kv.first);
+    g.stall_new = false;
+    const Rod& rod = w.rods()[g.rod];
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "holder stalled at the strain limit: moving on would stretch rod '%s' to %.3g%% "
+                  "between the held segment %d and node %d (held by a clamp or a grasp), beyond "
+                  "its material's max_strain %.3g%%; the holder stays until sent within reach",
+                  rod.name().c_str(), 100.0 * g.stall_strain, g.grasp.segment, g.stall_anchor,
+                  100.0 * rod.section().max_strain);
+    event(SimulationEvent::Kind::kStalled, t, kv.first, text);
+  }
 }
 
 void Simulation::take_guard_events() {

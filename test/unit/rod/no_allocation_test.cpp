@@ -9,6 +9,7 @@
 #include <new>
 #include <vector>
 
+#include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/integrators/implicit_step.h"
 #include "corde_sim/rod/boundary.h"
 #include "corde_sim/rod/material.h"
@@ -141,6 +142,39 @@ TEST(NoAllocation, WorldStepAllocatesNothing) {
   EXPECT_EQ(count, 0) << "heap allocations during 1000 World::step";
   EXPECT_TRUE(world.finite());
   EXPECT_GT(world.time(), 0.0199);
+}
+
+// A grasp's holder moving, then stalled at the strain limit (GraspSet::before_step's check):
+// nothing on the heap either.
+TEST(NoAllocation, GraspHolderStallAllocatesNothing) {
+  World world;
+  Rod& rod = world.add_rod(make_rod("rope", 10, Vec3::Zero()));
+  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  world.time_step = 2e-5;
+  GraspSpec spec;
+  spec.name = "g";
+  spec.rod = "rope";
+  GraspSet grasps;
+  ASSERT_EQ(grasps.add(world, spec, segment_pose(rod, 9), nullptr, 0.0), "");
+  Eigen::Isometry3d far = grasps.find("g")->holder.pose();
+  far.translation().x() += 5.0;
+  grasps.set_goal("g", 0.0, far, 0.0);
+  const HolderLimits limits;
+  auto step = [&] {
+    grasps.before_step(world, world.time(), world.time_step, limits);
+    world.step();
+    grasps.after_step(world, world.time_step);
+  };
+  step();  // the first hold makes the drives
+  long count = 0;
+  {
+    CountAllocations counter;
+    for (int k = 0; k < 5000; ++k) step();
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 5000 grasp steps";
+  EXPECT_TRUE(grasps.find("g")->stalled);
+  EXPECT_TRUE(world.finite());
 }
 
 // The implicit step reuses its buffers after the first step (operator new only: Eigen's dynamic
