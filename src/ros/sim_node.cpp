@@ -148,7 +148,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   diagnostics_->add("simulation", this, &SimNode::diagnose);
 
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
-  paused_ = params_.start_paused;
+  sim_.set_paused(params_.start_paused);
   // Two threads: a ~reset reading a long scene file does not hold a ~pause or ~list_grasps.
   services_->start(2);
   ROS_INFO(
@@ -156,7 +156,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
       "%s%s",
       initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(),
       corde::integrator_name(world_.integrator), world_.time_step, margin_text().c_str(),
-      paused_ ? ", paused" : "");
+      sim_.paused() ? ", paused" : "");
 }
 
 SimNode::~SimNode() {
@@ -282,24 +282,23 @@ void SimNode::advance(double now) {
 
 void SimNode::run_queued_steps(double now) {
   if (guard_.failed()) {
-    queued_steps_ = 0;
+    sim_.drop_queued_steps();
     return;
   }
   // As a paced batch: a few loop periods at most, and not past the next output.
   const double budget = std::max(3.0 / params_.loop_rate, 0.02);
   const double end = std::max(std::min(now + budget, schedule_.next_due()), now);
-  queued_steps_ -= run_steps(queued_steps_, end);
+  run_steps(sim_.queued_steps(), end);  // (each step takes one of the driver's queued steps)
   if (settle_guard()) {
     check_holders_and_strain();
   } else {
     ROS_WARN(
         "corde_sim: %ld queued ~step step(s) dropped: the stability guard stopped the "
         "simulation",
-        queued_steps_);
-    queued_steps_ = 0;
+        sim_.drop_queued_steps());
   }
   refresh_if_grasps_changed();
-  if (queued_steps_ == 0 && !step_call_)  // (a call still waiting says so in its reply)
+  if (sim_.queued_steps() == 0 && !step_call_)  // (a call still waiting says so in its reply)
     ROS_INFO("corde_sim: queued ~step steps done at t = %.6f s", sim_time());
 }
 
@@ -398,7 +397,8 @@ void SimNode::publish_tf() {
 }
 
 void SimNode::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
-  if (!paused_ || params_.tf_rate <= 0.0 || (params_.publish_clock && sim_time() <= 0.0)) return;
+  if (!sim_.paused() || params_.tf_rate <= 0.0 || (params_.publish_clock && sim_time() <= 0.0))
+    return;
   if (pub.getSubscriberName() == ros::this_node::getName()) return;
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
@@ -458,7 +458,7 @@ void SimNode::publish_state() {
   msg->time_step = world_.time_step;
   msg->step_time_us = step_time_us_;
   msg->real_time_factor = measured_rtf_;
-  msg->paused = paused_;
+  msg->paused = sim_.paused();
   const corde::ContactSystem* contacts = world_.contacts();
   msg->contacts = contacts ? contacts->stats().contacts : 0;
   msg->active_contacts = contacts ? contacts->stats().active : 0;
@@ -519,11 +519,11 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   } else if (stability_margin_ > 1.0) {
     stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
                   stability_margin_);
-  } else if (!paused_ && target > 0.0 && lagging_) {
+  } else if (!sim_.paused() && target > 0.0 && lagging_) {
     stat.summaryf(DiagnosticStatus::WARN, "slower than real_time_factor %.3g (measured %.3g)",
                   target, measured_rtf_);
   } else {
-    stat.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
+    stat.summary(DiagnosticStatus::OK, sim_.paused() ? "paused" : "running");
   }
   stat.add("simulation time (s)", sim_time());
   stat.add("steps", steps_total_);
@@ -533,7 +533,7 @@ void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   stat.add("real-time factor (measured)", measured_rtf_);
   stat.add("real-time factor (target, 0 = max)", target);
   stat.add("substeps per loop", steps_last_iteration_);
-  stat.add("queued steps", queued_steps_);        // ~step's, run while paused
+  stat.add("queued steps", sim_.queued_steps());  // ~step's, run while paused
   stat.add("queued inputs", commands_.inputs());  // at most one per grasp and kind
   stat.add("stability margin h/h_crit", stability_margin_);
   stat.add("stability limiting rod", limiting_rod_);
@@ -565,7 +565,7 @@ void SimNode::log_status() const {
       "%.2f us/step, %s%s",
       sim_time(), steps_total_, world_.time_step, measured_rtf_, params_.real_time_factor,
       params_.real_time_factor > 0.0 ? "" : " = max", step_time_us_, margin_text().c_str(),
-      paused_ ? ", paused" : "");
+      sim_.paused() ? ", paused" : "");
 }
 
 int SimNode::run() {
@@ -593,9 +593,9 @@ int SimNode::run() {
     update_robot();
     drain_commands();
     now = wall_seconds();
-    if (!paused_)
+    if (!sim_.paused())
       advance(now);
-    else if (queued_steps_ > 0)
+    else if (sim_.queued_steps() > 0)
       run_queued_steps(now);
     now = wall_seconds();
     if (step_call_) answer_step_call(now);
@@ -610,9 +610,9 @@ int SimNode::run() {
     output_wall_max = std::max(output_wall_max, out_wall);
     if (now >= bench_end) break;
     double wake = now;
-    if (paused_ && queued_steps_ > 0)
+    if (sim_.paused() && sim_.queued_steps() > 0)
       wake = now;  // more queued steps: only the callbacks waiting now are served
-    else if (paused_)
+    else if (sim_.paused())
       wake = std::min(schedule_.next_due(), now + 0.05);  // rod_state keeps its rate while paused
     else if (pacer_.paced())
       wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);

@@ -597,7 +597,9 @@ void SimNode::check_holders_and_strain() {
         best = std::abs(kv.second.grasp.segment - seg);
         nearest = kv.first;
       }
-    if (!nearest.empty() && grasps_.release(world_, nearest)) {
+    if (!nearest.empty()) {
+      sim_.submit(corde::Command::release(world_.time(), nearest));
+      sim_.apply_due();
       end_script(nearest, "slipped");
       // As a release by service: a rollback must not hold the segment again (grasps_ goes back
       // with the world), the node having said that it slipped.

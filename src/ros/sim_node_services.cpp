@@ -167,6 +167,7 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   if (!in_loop([&] {
         // The new world starts at its own time 0; the node's clock continues from where it was.
         const double t = sim_time();
+        const long queued = sim_.queued_steps();  // (the driver drops them with its old world)
         const std::string error = install_scene(std::move(scene), path);
         if (!error.empty()) {
           res.message = "scene not used, state unchanged: " + error + stopped_note();
@@ -179,10 +180,8 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
         res.message =
             "reset to '" + clip(path) + "' at t = " + num(sim_time()) + " s" + guard_note_;
         guard_note_.clear();
-        if (queued_steps_ > 0) {
-          res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
-          queued_steps_ = 0;
-        }
+        if (queued > 0)
+          res.message += "; dropped " + std::to_string(queued) + " queued ~step step(s)";
         ROS_INFO("corde_sim: %s", res.message.c_str());
       }))
     res.message = "the node is shutting down";
@@ -292,16 +291,16 @@ bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Respo
 }
 
 void SimNode::pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
-  if (paused_ != static_cast<bool>(req.data)) {
-    paused_ = req.data;
-    if (!paused_) pacer_.anchor(sim_time(), wall_seconds());  // no backlog from the pause
+  const long queued = sim_.queued_steps();
+  if (sim_.paused() != static_cast<bool>(req.data)) {
+    sim_.set_paused(req.data);  // resuming drops the queued steps
+    if (!sim_.paused()) pacer_.anchor(sim_time(), wall_seconds());  // no backlog from the pause
   }
   res.success = true;
-  res.message = std::string(paused_ ? "paused" : "running") + " at t = " + num(sim_time()) + " s";
-  if (!paused_ && queued_steps_ > 0) {
-    res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
-    queued_steps_ = 0;
-  }
+  res.message =
+      std::string(sim_.paused() ? "paused" : "running") + " at t = " + num(sim_time()) + " s";
+  if (!sim_.paused() && queued > 0)
+    res.message += "; dropped " + std::to_string(queued) + " queued ~step step(s)";
 }
 
 bool SimNode::on_step(Step::Request& req, Step::Response& res) {
@@ -317,28 +316,28 @@ void SimNode::start_step_call(const Step::Request& req, Step::Response* res,
                               const ReplyPtr& reply) {
   res->time = sim_time();
   res->success = false;
-  if (!paused_)
+  const long queued = sim_.queued_steps();
+  if (!sim_.paused())
     res->message = "not paused: call ~pause with data: true first";
   else if (req.steps < 1 || req.steps > 10000000)
     res->message = "steps must be in [1, 10000000], got " + std::to_string(req.steps);
-  else if (queued_steps_ + req.steps > kMaxQueuedSteps)
-    res->message = std::to_string(queued_steps_) + " step(s) are still queued; at most " +
+  else if (queued + req.steps > kMaxQueuedSteps)
+    res->message = std::to_string(queued) + " step(s) are still queued; at most " +
                    std::to_string(kMaxQueuedSteps) + " may wait";
   if (!res->message.empty()) {
     reply->set();
     return;
   }
-  if (queued_steps_ > 0) {  // after the ones waiting (their call was answered)
-    queued_steps_ += req.steps;
+  sim_.queue_steps(req.steps);
+  if (queued > 0) {  // after the ones waiting (their call was answered)
     res->success = true;
     res->message = "queued " + std::to_string(req.steps) + " step(s) behind " +
-                   std::to_string(queued_steps_ - req.steps) + " still queued" + kQueuedNote;
+                   std::to_string(queued) + " still queued" + kQueuedNote;
     reply->set();
     return;
   }
   // Run by the loop in slices with the outputs between (run_queued_steps); answered by
   // answer_step_call().
-  queued_steps_ = req.steps;
   step_call_ = std::make_unique<StepCall>();
   step_call_->reply = reply;
   step_call_->res = res;
@@ -351,7 +350,8 @@ void SimNode::start_step_call(const Step::Request& req, Step::Response* res,
 void SimNode::answer_step_call(double now) {
   StepCall& c = *step_call_;
   const bool stopped = guard_.failed();
-  if (queued_steps_ > 0 && !stopped && paused_ && now < c.answer_by) return;
+  const long queued = sim_.queued_steps();
+  if (queued > 0 && !stopped && sim_.paused() && now < c.answer_by) return;
   Step::Response& res = *c.res;
   const long done = static_cast<long>(steps_total_) - c.steps_before;
   res.time = sim_time();
@@ -364,11 +364,10 @@ void SimNode::answer_step_call(double now) {
       : recoveries_ > c.detections_before
           ? stepped + "; the stability guard rolled back and retried (" + last_problem_ + ")"
           : stepped;
-  if (!stopped && done < c.requested && queued_steps_ == 0)
+  if (!stopped && done < c.requested && queued == 0)
     res.message +=
         "; the other " + std::to_string(c.requested - done) + " were dropped (~pause, ~reset)";
-  if (queued_steps_ > 0)
-    res.message += "; queued the other " + std::to_string(queued_steps_) + kQueuedNote;
+  if (queued > 0) res.message += "; queued the other " + std::to_string(queued) + kQueuedNote;
   c.reply->set();  // (res belongs to the caller from here on)
   step_call_.reset();
 }
@@ -515,7 +514,10 @@ void SimNode::release(Release::Request& req, Release::Response& res) {
         !g ? "no grasp named '" + req.name + "'" : "grasp '" + req.name + "' is already released";
     return;
   }
-  grasps_.release(world_, req.name);
+  // Through the driver, behind the inputs that arrived before it: a wrench sent before the
+  // release applies first. Applied now, so that the reply and ~list_grasps show it.
+  sim_.submit(corde::Command::release(world_.time(), req.name));
+  sim_.apply_due();
   end_script(req.name, "was released (~release)");
   res.success = true;
   res.message = "released grasp '" + req.name + "'";

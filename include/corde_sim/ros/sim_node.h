@@ -232,8 +232,6 @@ class SimNode {
 
   double time_offset_ = 0.0;  // node simulation time = time_offset_ + world_.time()
   ros::Time epoch_;           // ROS time of simulation time 0 when not publishing /clock
-  bool paused_ = false;
-  long queued_steps_ = 0;  // ~step's steps not run yet (only while paused)
   Pacer pacer_;
   bool markers_clear_ = true;
   double stability_margin_ = 0.0;  // h / h_crit, largest over rods
