@@ -265,12 +265,20 @@ void SimNode::advance(double now) {
   }
   if (pacer_.paced()) {
     const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
-    // A batch may take a few loop periods; beyond that the simulation cannot keep up, and the
-    // backlog is dropped instead of growing (the measured real-time factor shows it).
+    // The steps due may take a few loop periods (from when they were first due); beyond that the
+    // simulation cannot keep up, and the backlog is dropped instead of growing (the measured
+    // real-time factor shows it). A batch also stops at the next output and goes on after it, so
+    // that no output waits for more than one step.
     const double budget = std::max(3.0 / params_.loop_rate, 0.02);
-    const long done = due > 0 ? run_steps(due, now + budget) : 0;
-    lagging_ = done < due && !guard_.failed();
-    if (lagging_) pacer_.anchor(sim_time(), wall_seconds());
+    const double budget_end = (pacer_.behind_since() < 0.0 ? now : pacer_.behind_since()) + budget;
+    const double end = std::max(std::min(budget_end, schedule_.next_due()), now);
+    const long done = due > 0 ? run_steps(due, end) : 0;
+    const bool behind = done < due && !guard_.failed();
+    lagging_ = behind && wall_seconds() >= budget_end;
+    if (lagging_)
+      pacer_.anchor(sim_time(), wall_seconds());
+    else
+      pacer_.set_behind(behind, now);
   } else {
     // As fast as possible, in slices short enough to serve callbacks and outputs on time.
     const double slice_end = std::min(now + 0.005, schedule_.next_due());
@@ -614,7 +622,7 @@ int SimNode::run() {
       wake = now;  // more queued steps: only the callbacks waiting now are served
     else if (sim_.paused())
       wake = std::min(schedule_.next_due(), now + 0.05);  // rod_state keeps its rate while paused
-    else if (pacer_.paced())
+    else if (pacer_.paced() && pacer_.behind_since() < 0.0)  // (steps still due: no sleep)
       wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
   }
