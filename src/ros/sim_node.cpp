@@ -3,7 +3,6 @@
 
 #include <ros/callback_queue.h>
 #include <ros/package.h>
-#include <rosgraph_msgs/Clock.h>
 #include <time.h>
 
 #include <algorithm>
@@ -12,7 +11,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "corde_sim/stability/explicit_step_limit.h"
+#include "corde_sim/ros/input_checks.h"
 
 namespace corde_sim {
 
@@ -69,12 +68,12 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   guard_settings.limits.max_angular_speed = params_.max_angular_speed;
   guard_.set_settings(guard_settings);
   sim_.set_obstacle_mover([this](corde::World* w, double h) {
-    if (!robot_.empty()) robot_.before_step(w->obstacles.get(), h);
+    if (!scene_.robot().empty()) scene_.robot().before_step(w->obstacles.get(), h);
   });
-  sim_.set_step_observer([this](const corde::World& w) { watch_contacts(w); });
+  sim_.set_step_observer([this](const corde::World& w) { outputs_.watch_contacts(w); });
   corde::Scene scene;
   std::string resolve_error;
-  const std::string scene_file = resolve_scene(params_.scene, &resolve_error);
+  const std::string scene_file = scene_.resolve_scene(params_.scene, &resolve_error);
   if (scene_file.empty()) throw std::invalid_argument("parameter ~scene: " + resolve_error);
   params_.scene = scene_file;
   try {
@@ -92,33 +91,15 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
           g.first.c_str());
   }
 
-  // tf input: own subscriptions so that this node's own (large) /tf messages are skipped
-  // without being stored; everything else goes into the buffer.
-  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-  tf_input_ = std::make_unique<TfInput>(nh_, tf_buffer_.get());
+  inputs_.start_tf();
+  outputs_.advertise();
 
-  // A listener that connects while the simulation is paused would otherwise see no frames until
-  // it resumes (frames are sent once per stamp): it alone gets the current ones.
-  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>(
-      "/tf", 100, [this](const ros::SingleSubscriberPublisher& pub) { send_tf_to(pub); });
-  marker_pub_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 1);
-  tf_frames_.set_node_frames(params_.node_frames);  // before the first layout
-  state_pub_ = nh_.advertise<WorldState>("rod_state", 10);
-  if (params_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
-
-  load_robot();
-  std::string error = install_scene(std::move(scene), params_.scene);
+  scene_.load_robot();
+  std::string error = scene_.install_scene(std::move(scene), params_.scene);
   if (!error.empty()) throw std::invalid_argument("parameter ~scene: " + error);
 
   // Services on their own queue, served by their own threads (command_queue.h), started last.
-  services_ = std::make_unique<ServiceThreads>(pnh_);
-  services_->advertise("reset", &SimNode::on_reset, this);
-  services_->advertise("configure", &SimNode::on_configure, this);
-  services_->advertise("pause", &SimNode::on_pause, this);
-  services_->advertise("step", &SimNode::on_step, this);
-  services_->advertise("grasp", &SimNode::on_grasp, this);
-  services_->advertise("release", &SimNode::on_release, this);
-  services_->advertise("list_grasps", &SimNode::on_list_grasps, this);
+  services_.advertise(pnh_);
   // A command queued from another thread wakes the loop at once (it waits on the global queue).
   commands_.set_wake([] {
     class Wake : public ros::CallbackInterface {
@@ -130,69 +111,43 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
 
   // dynamic_reconfigure starts from the parameters as read (its first request, made in this
   // thread, is queued and applied here below); later requests are served by its own thread.
-  NodeConfig initial;
-  initial.real_time_factor = params_.real_time_factor;
-  initial.tf_rate = params_.tf_rate;
-  initial.marker_rate = params_.marker_rate;
-  initial.state_rate = params_.state_rate;
-  initial.marker_style =
-      params_.marker_style == MarkerStyle::kLineStrip ? "line_strip" : "cylinders";
-  initial.marker_min_diameter = params_.marker_min_diameter;
-  initial.holder_max_speed = params_.holder_max_speed;
-  initial.holder_max_acceleration = params_.holder_max_acceleration;
-  reconfigure_ =
-      std::make_unique<ReconfigureInput>(pnh_, initial, &commands_, &loop_running_,
-                                         [this](const NodeConfig& c) { apply_reconfigure(c); });
+  inputs_.start_reconfigure();
   drain_commands();
 
-  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, pnh_);
-  diagnostics_->setHardwareID("corde_sim");
-  diagnostics_->add("simulation", this, &SimNode::diagnose);
+  outputs_.start_diagnostics();
 
   epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
-  paused_ = params_.start_paused;
+  sim_.set_paused(params_.start_paused);
   // Two threads: a ~reset reading a long scene file does not hold a ~pause or ~list_grasps.
-  services_->start(2);
+  services_.start(2);
   ROS_INFO(
       "corde_sim: scene '%s' with %zu rod(s), %zu grasp(s), integrator %s, time step %g s, "
       "%s%s",
-      initial_.name.c_str(), world_.rods().size(), grasps_.grasps().size(),
-      corde::integrator_name(world_.integrator), world_.time_step, margin_text().c_str(),
-      paused_ ? ", paused" : "");
+      scene_.initial().name.c_str(), world_.rods().size(), grasps_.grasps().size(),
+      corde::integrator_name(world_.integrator), world_.time_step, outputs_.margin_text().c_str(),
+      sim_.paused() ? ", paused" : "");
 }
 
 SimNode::~SimNode() {
   close_commands();
-  if (services_) services_->stop();
-  reconfigure_.reset();
+  services_.stop();
+  inputs_.stop_reconfigure();
 }
 
 void SimNode::close_commands() {
   // Waiting callers return (their commands are not applied), so that their threads can stop.
   loop_running_ = false;
   commands_.close();
-  if (step_call_) {
-    step_call_->res->success = false;
-    step_call_->res->message = "the node is shutting down";
-    step_call_->reply->set();
-    step_call_.reset();
-  }
+  services_.close();
 }
 
 void SimNode::drain_commands() {
   for (CommandQueue::Command& c : commands_.take()) {
     if (c.is_input)
-      apply_input(c.input);
+      inputs_.apply_input(c.input);
     else
       c.apply(c.reply);
   }
-}
-
-bool SimNode::in_loop(const std::function<void()>& fn) {
-  return commands_.call([&fn](const ReplyPtr& reply) {
-    fn();
-    reply->set();
-  });
 }
 
 ros::Time SimNode::stamp() const {
@@ -205,30 +160,6 @@ void SimNode::bump_time() {
   // A changed state (reset, configure, grasp) gets a later stamp than anything published before,
   // so tf listeners never see two different poses at one stamp.
   time_offset_ += world_.time_step;
-}
-
-std::string SimNode::margin_text() const {
-  // The explicit limit means nothing to the implicit method: saying 0 would read as a margin.
-  if (corde::is_implicit(world_.integrator)) return "no explicit step limit";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "h/h_crit %.3g", stability_margin_);
-  return buf;
-}
-
-void SimNode::update_stability() { stability_margin_ = explicit_margin(world_, &limiting_rod_); }
-
-void SimNode::watch_contacts(const corde::World& world) {
-  if (const corde::ContactSystem* c = world.contacts()) {
-    max_penetration_since_state_ =
-        std::max(max_penetration_since_state_, c->stats().max_penetration);
-    // A deep contact (a cable pinched between links, a link moved into it): named, not launched.
-    const double ratio = c->stats().max_ratio;
-    if (ratio > world.contact.deep_penetration && ratio > deepest_ratio_since_state_) {
-      deepest_ratio_since_state_ = ratio;
-      deepest_contact_since_state_ =
-          corde::deep_contact_report(world, world.contact.deep_penetration, 2);
-    }
-  }
 }
 
 long SimNode::run_steps(long n, double deadline) {
@@ -248,12 +179,12 @@ long SimNode::run_steps(long n, double deadline) {
   }
   report_guard_events();  // (scripts taking hold or letting go: the layout follows)
   const double dt = wall_seconds() - t0;
-  step_cpu_total_ += thread_cpu_seconds() - c0;
+  stats_.step_cpu_total += thread_cpu_seconds() - c0;
   refresh_if_grasps_changed();
-  steps_total_ += k;
-  steps_since_stats_ += k;
-  step_wall_since_stats_ += dt;
-  steps_last_iteration_ = k;
+  stats_.steps_total += k;
+  stats_.steps_since_stats += k;
+  stats_.step_wall_since_stats += dt;
+  stats_.steps_last_iteration = k;
   return k;
 }
 
@@ -267,15 +198,23 @@ void SimNode::advance(double now) {
   }
   if (pacer_.paced()) {
     const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
-    // A batch may take a few loop periods; beyond that the simulation cannot keep up, and the
-    // backlog is dropped instead of growing (the measured real-time factor shows it).
+    // The steps due may take a few loop periods (from when they were first due); beyond that the
+    // simulation cannot keep up, and the backlog is dropped instead of growing (the measured
+    // real-time factor shows it). A batch also stops at the next output and goes on after it, so
+    // that no output waits for more than one step.
     const double budget = std::max(3.0 / params_.loop_rate, 0.02);
-    const long done = due > 0 ? run_steps(due, now + budget) : 0;
-    lagging_ = done < due && !guard_.failed();
-    if (lagging_) pacer_.anchor(sim_time(), wall_seconds());
+    const double budget_end = (pacer_.behind_since() < 0.0 ? now : pacer_.behind_since()) + budget;
+    const double end = std::max(std::min(budget_end, outputs_.schedule().next_due()), now);
+    const long done = due > 0 ? run_steps(due, end) : 0;
+    const bool behind = done < due && !guard_.failed();
+    stats_.lagging = behind && wall_seconds() >= budget_end;
+    if (stats_.lagging)
+      pacer_.anchor(sim_time(), wall_seconds());
+    else
+      pacer_.set_behind(behind, now);
   } else {
     // As fast as possible, in slices short enough to serve callbacks and outputs on time.
-    const double slice_end = std::min(now + 0.005, schedule_.next_due());
+    const double slice_end = std::min(now + 0.005, outputs_.schedule().next_due());
     run_steps(std::numeric_limits<long>::max(), std::max(slice_end, now));
   }
   if (settle_guard()) check_holders_and_strain();
@@ -284,31 +223,31 @@ void SimNode::advance(double now) {
 
 void SimNode::run_queued_steps(double now) {
   if (guard_.failed()) {
-    queued_steps_ = 0;
+    sim_.drop_queued_steps();
     return;
   }
   // As a paced batch: a few loop periods at most, and not past the next output.
   const double budget = std::max(3.0 / params_.loop_rate, 0.02);
-  const double end = std::max(std::min(now + budget, schedule_.next_due()), now);
-  queued_steps_ -= run_steps(queued_steps_, end);
+  const double end = std::max(std::min(now + budget, outputs_.schedule().next_due()), now);
+  run_steps(sim_.queued_steps(), end);  // (each step takes one of the driver's queued steps)
   if (settle_guard()) {
     check_holders_and_strain();
   } else {
     ROS_WARN(
         "corde_sim: %ld queued ~step step(s) dropped: the stability guard stopped the "
         "simulation",
-        queued_steps_);
-    queued_steps_ = 0;
+        sim_.drop_queued_steps());
   }
   refresh_if_grasps_changed();
-  if (queued_steps_ == 0 && !step_call_)  // (a call still waiting says so in its reply)
+  // (A call still waiting says so in its reply.)
+  if (sim_.queued_steps() == 0 && !services_.step_call_waiting())
     ROS_INFO("corde_sim: queued ~step steps done at t = %.6f s", sim_time());
 }
 
 void SimNode::refresh_if_grasps_changed() {
   if (!layout_changed_) return;
   layout_changed_ = false;
-  refresh_layout();  // the grasp frames and markers follow the held grasps
+  outputs_.refresh_layout();  // the grasp frames and markers follow the held grasps
 }
 
 bool SimNode::settle_guard() {
@@ -347,7 +286,7 @@ void SimNode::report_guard_events() {
       ROS_INFO_THROTTLE(5.0, "corde_sim: stability guard: %s%s", when, e.message().c_str());
       continue;
     }
-    last_problem_ = e.message();
+    stats_.last_problem = e.message();
     if (e.kind == corde::GuardEvent::Kind::kUnrecoverable) {
       ROS_ERROR(
           "corde_sim: stability guard: %sno retry helped: %s. The simulation stopped at its "
@@ -356,238 +295,37 @@ void SimNode::report_guard_events() {
           when, e.message().c_str());
       continue;
     }
-    ++recoveries_;
+    ++stats_.recoveries;
     ROS_WARN_THROTTLE(1.0, "corde_sim: stability guard: %s%s (h/h_crit %.2f, limiting rod '%s')",
-                      when, e.message().c_str(), stability_margin_, limiting_rod_.c_str());
+                      when, e.message().c_str(), stats_.stability_margin,
+                      stats_.limiting_rod.c_str());
   }
 }
 
 std::string SimNode::restart_guard() {
   std::string note;
   if (guard_.failed())
-    note = "; the simulation had stopped (stability guard: " + last_problem_ + ") and resumes";
+    note =
+        "; the simulation had stopped (stability guard: " + stats_.last_problem + ") and resumes";
   report_guard_events();
   sim_.restart_guard();  // snapshots the world, the grasps and the scripts
   return note;
-}
-
-std::vector<GraspView> SimNode::grasp_views() const {
-  std::vector<GraspView> views;
-  for (const auto& kv : grasps_.grasps()) {
-    if (!kv.second.held) continue;
-    GraspView v;
-    v.name = kv.first;
-    auto w = wiring_.find(kv.first);
-    v.id = w == wiring_.end() ? 0 : w->second.marker_id;
-    v.pose = kv.second.holder_pose();
-    views.push_back(v);
-  }
-  return views;
-}
-
-void SimNode::refresh_layout() {
-  tf_frames_.layout(world_, grasp_views(), params_.frame_prefix, params_.world_frame,
-                    params_.tf_every_k);
-  markers_clear_ = true;
-  update_stability();
-}
-
-void SimNode::publish_tf() {
-  const double t = sim_time();
-  if (t <= last_tf_time_) return;                 // every frame once per stamp
-  if (params_.publish_clock && t <= 0.0) return;  // stamp 0 means "latest" to tf
-  last_tf_time_ = t;
-  if (tf_pub_.getNumSubscribers() == 0) return;
-  // One message per publish, handed over by pointer: in-process listeners get it without a copy.
-  auto msg = boost::make_shared<tf2_msgs::TFMessage>();
-  msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
-  tf_pub_.publish(msg);
-}
-
-void SimNode::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
-  if (!paused_ || params_.tf_rate <= 0.0 || (params_.publish_clock && sim_time() <= 0.0)) return;
-  if (pub.getSubscriberName() == ros::this_node::getName()) return;
-  auto msg = boost::make_shared<tf2_msgs::TFMessage>();
-  msg->transforms = tf_frames_.update(world_, grasp_views(), stamp());
-  pub.publish(msg);
-}
-
-void SimNode::publish_markers() {
-  publish_paths();  // same rate, each topic built only for its subscribers
-  if (marker_pub_.getNumSubscribers() == 0) return;
-  MarkerOptions o;
-  o.style = params_.marker_style;
-  o.show_frames = params_.show_frames;
-  o.color_by_strain = params_.color_by_strain;
-  o.min_diameter = params_.marker_min_diameter;
-  o.frames_every_k = params_.tf_every_k;
-  o.world_frame = params_.world_frame;
-  auto msg = boost::make_shared<visualization_msgs::MarkerArray>();
-  build_markers(world_, grasp_views(), o, stamp(), markers_clear_, msg.get());
-  if (markers_clear_) contact_arrows_ = 0;  // the DELETEALL took them
-  if (params_.contact_markers)
-    contact_arrows_ = add_contact_markers(world_, params_.contact_force_scale, o, stamp(),
-                                          contact_arrows_, msg.get());
-  markers_clear_ = false;
-  marker_pub_.publish(msg);
-}
-
-void SimNode::publish_paths() { rod_paths_.publish(nh_, world_, params_.world_frame, stamp()); }
-
-void SimNode::update_stats(double now) {
-  if (steps_since_stats_ > 0) step_time_us_ = 1e6 * step_wall_since_stats_ / steps_since_stats_;
-  // Real-time factor averaged over about a second: one publish period holds only a few loop
-  // iterations, whose batches of steps do not line up with it.
-  const double wall = now - wall_at_stats_;
-  if (wall > 0.0) {
-    const double rtf = (sim_time() - sim_at_stats_) / wall;
-    const double a = std::min(1.0, wall / 1.0);
-    measured_rtf_ = rtf_initialised_ ? measured_rtf_ + a * (rtf - measured_rtf_) : rtf;
-    rtf_initialised_ = true;
-  }
-  substeps_per_publish_ = steps_since_stats_;
-  steps_since_stats_ = 0;
-  step_wall_since_stats_ = 0.0;
-  sim_at_stats_ = sim_time();
-  wall_at_stats_ = now;
-}
-
-void SimNode::publish_state() {
-  if (state_pub_.getNumSubscribers() == 0) return;
-  auto msg = boost::make_shared<WorldState>();
-  msg->header.stamp = stamp();
-  msg->header.frame_id = params_.world_frame;
-  fill_rod_states(world_, msg.get());
-  msg->sim_time = sim_time();
-  msg->steps = steps_total_;
-  msg->substeps_per_publish =
-      static_cast<int>(std::min<long>(substeps_per_publish_, std::numeric_limits<int>::max()));
-  msg->time_step = world_.time_step;
-  msg->step_time_us = step_time_us_;
-  msg->real_time_factor = measured_rtf_;
-  msg->paused = paused_;
-  const corde::ContactSystem* contacts = world_.contacts();
-  msg->contacts = contacts ? contacts->stats().contacts : 0;
-  msg->active_contacts = contacts ? contacts->stats().active : 0;
-  msg->max_penetration = max_penetration_since_state_;
-  msg->deepest_contact = deepest_contact_since_state_;
-  state_pub_.publish(msg);
-}
-
-void SimNode::publish_clock() {
-  const double t = sim_time();
-  if (t <= last_clock_ || t <= 0.0) return;
-  last_clock_ = t;
-  rosgraph_msgs::Clock c;
-  c.clock = ros::Time(t);
-  clock_pub_.publish(c);
-}
-
-void SimNode::publish_due(double now) {
-  // With /clock from this node, stamp 0 would read as "latest" (tf) or "unset": wait for t > 0.
-  if (params_.publish_clock && sim_time() <= 0.0) return;
-  if (params_.publish_clock) publish_clock();
-  if (schedule_.take(OutputSchedule::kTf, now)) publish_tf();
-  if (schedule_.take(OutputSchedule::kMarkers, now)) publish_markers();
-  // Statistics and reactions follow the state message (which runs at 2 Hz unpublished when off).
-  if (schedule_.take(OutputSchedule::kState, now)) {
-    update_stats(now);
-    if (params_.state_rate > 0.0) publish_state();
-    max_penetration_since_state_ = 0.0;
-    if (!deepest_contact_since_state_.empty()) {
-      deep_contact_warning_ = "deep contact: " + deepest_contact_since_state_;
-      ROS_WARN_THROTTLE(2.0, "corde_sim: %s", deep_contact_warning_.c_str());
-    }
-    deepest_ratio_since_state_ = 0.0;
-    deepest_contact_since_state_.clear();
-    publish_reactions();
-  }
-}
-
-void SimNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
-  using diagnostic_msgs::DiagnosticStatus;
-  const double target = params_.real_time_factor;
-  if (guard_.failed()) {
-    stat.summaryf(DiagnosticStatus::ERROR,
-                  "stopped at the last good state: the stability guard could not recover (%s); "
-                  "~reset or ~configure to resume",
-                  last_problem_.c_str());
-  } else if (recoveries_ > recoveries_reported_) {
-    stat.summaryf(DiagnosticStatus::WARN,
-                  "the stability guard rolled back and retried %d time(s) (last: %s)%s",
-                  recoveries_ - recoveries_reported_, last_problem_.c_str(),
-                  guard_.reduced() ? "; running a reduced step or the implicit method" : "");
-    recoveries_reported_ = recoveries_;
-  } else if (!strain_warning_.empty()) {
-    stat.summary(DiagnosticStatus::WARN, strain_warning_);
-    strain_warning_.clear();
-  } else if (!deep_contact_warning_.empty()) {
-    stat.summary(DiagnosticStatus::WARN, deep_contact_warning_);
-  } else if (stability_margin_ > 1.0) {
-    stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
-                  stability_margin_);
-  } else if (!paused_ && target > 0.0 && lagging_) {
-    stat.summaryf(DiagnosticStatus::WARN, "slower than real_time_factor %.3g (measured %.3g)",
-                  target, measured_rtf_);
-  } else {
-    stat.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
-  }
-  stat.add("simulation time (s)", sim_time());
-  stat.add("steps", steps_total_);
-  stat.add("integrator", corde::integrator_name(world_.integrator));
-  stat.add("time step (s)", world_.time_step);
-  stat.add("step time (us)", step_time_us_);
-  stat.add("real-time factor (measured)", measured_rtf_);
-  stat.add("real-time factor (target, 0 = max)", target);
-  stat.add("substeps per loop", steps_last_iteration_);
-  stat.add("queued steps", queued_steps_);        // ~step's, run while paused
-  stat.add("queued inputs", commands_.inputs());  // at most one per grasp and kind
-  stat.add("stability margin h/h_crit", stability_margin_);
-  stat.add("stability limiting rod", limiting_rod_);
-  stat.add("rods", world_.rods().size());
-  stat.add("grasps", grasps_.grasps().size());
-  // Contacts of the last step (none when the scene has nothing to collide).
-  const corde::ContactSystem* contacts = world_.contacts();
-  stat.add("obstacles", world_.obstacles ? world_.obstacles->size() : 0);
-  stat.add("contacts", contacts ? contacts->stats().contacts : 0);
-  stat.add("contacts carrying a force", contacts ? contacts->stats().active : 0);
-  stat.add("largest penetration (m)", contacts ? contacts->stats().max_penetration : 0.0);
-  stat.add("deep contact since the last report", deep_contact_warning_);
-  deep_contact_warning_.clear();
-  if (!robot_.empty())
-    stat.addf("robot collision elements (in tf / all)", "%d / %d", robot_.active(),
-              robot_.elements());
-  stat.add("stability guard detections", recoveries_);
-  stat.add("stability guard last event", last_problem_);
-  stat.add("stability guard state", guard_.failed()    ? "stopped (unrecoverable)"
-                                    : guard_.reduced() ? "recovering (reduced step or method)"
-                                                       : "ok");
-  stat.add("stability guard time step (s)", guard_.time_step());
-}
-
-// A line a user watching the console (make run) can follow without rqt or rostopic.
-void SimNode::log_status() const {
-  ROS_INFO(
-      "corde_sim: t = %.3f s, %lu steps of %g s, real-time factor %.3g (target %g%s), "
-      "%.2f us/step, %s%s",
-      sim_time(), steps_total_, world_.time_step, measured_rtf_, params_.real_time_factor,
-      params_.real_time_factor > 0.0 ? "" : " = max", step_time_us_, margin_text().c_str(),
-      paused_ ? ", paused" : "");
 }
 
 int SimNode::run() {
   ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
   double now = wall_seconds();
   pacer_.reset(params_.real_time_factor, sim_time(), now);
-  schedule_.set_rate(OutputSchedule::kTf, params_.tf_rate);
-  schedule_.set_rate(OutputSchedule::kMarkers, params_.marker_rate);
-  schedule_.set_rate(OutputSchedule::kState, params_.state_rate > 0.0 ? params_.state_rate : 2.0);
-  schedule_.start(now);
-  sim_at_stats_ = sim_time();
-  wall_at_stats_ = now;
+  outputs_.schedule().set_rate(OutputSchedule::kTf, params_.tf_rate);
+  outputs_.schedule().set_rate(OutputSchedule::kMarkers, params_.marker_rate);
+  outputs_.schedule().set_rate(OutputSchedule::kState,
+                               params_.state_rate > 0.0 ? params_.state_rate : 2.0);
+  outputs_.schedule().start(now);
+  stats_.sim_at_stats = sim_time();
+  stats_.wall_at_stats = now;
   const double start_wall = now, start_cpu = process_cpu_seconds(), start_sim = sim_time();
-  const unsigned long start_steps = steps_total_;
-  const double start_step_cpu = step_cpu_total_;
+  const unsigned long start_steps = stats_.steps_total;
+  const double start_step_cpu = stats_.step_cpu_total;
   const double bench_end =
       params_.benchmark > 0.0 ? now + params_.benchmark : std::numeric_limits<double>::infinity();
   double output_wall_total = 0.0, output_wall_max = 0.0;
@@ -596,33 +334,30 @@ int SimNode::run() {
     // Inputs: topic callbacks and tf-followed frames queue theirs; then every command waiting
     // (inputs, services, reconfigure) is applied, oldest first, before the steps.
     queue->callAvailable(ros::WallDuration(0));
-    update_tf_holders();
-    update_robot();
+    inputs_.update_tf_holders();
+    inputs_.update_robot();
     drain_commands();
     now = wall_seconds();
-    if (!paused_)
+    if (!sim_.paused())
       advance(now);
-    else if (queued_steps_ > 0)
+    else if (sim_.queued_steps() > 0)
       run_queued_steps(now);
     now = wall_seconds();
-    if (step_call_) answer_step_call(now);
-    publish_due(now);
-    diagnostics_->update();
-    if (params_.status_period > 0.0 && now >= next_status_) {
-      if (next_status_ > 0.0) log_status();  // none at start: nothing has run yet
-      next_status_ = now + params_.status_period;
-    }
+    if (services_.step_call_waiting()) services_.answer_step_call(now);
+    outputs_.publish_due(now);
+    outputs_.update_diagnostics(now);
     const double out_wall = wall_seconds() - now;
     output_wall_total += out_wall;
     output_wall_max = std::max(output_wall_max, out_wall);
     if (now >= bench_end) break;
     double wake = now;
-    if (paused_ && queued_steps_ > 0)
+    if (sim_.paused() && sim_.queued_steps() > 0)
       wake = now;  // more queued steps: only the callbacks waiting now are served
-    else if (paused_)
-      wake = std::min(schedule_.next_due(), now + 0.05);  // rod_state keeps its rate while paused
-    else if (pacer_.paced())
-      wake = std::min(schedule_.next_due(), now + 1.0 / params_.loop_rate);
+    else if (sim_.paused())
+      wake = std::min(outputs_.schedule().next_due(),
+                      now + 0.05);  // rod_state keeps its rate while paused
+    else if (pacer_.paced() && pacer_.behind_since() < 0.0)  // (steps still due: no sleep)
+      wake = std::min(outputs_.schedule().next_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
   }
   close_commands();
@@ -632,8 +367,8 @@ int SimNode::run() {
         "in all, %.2f ms at most per loop iteration",
         output_wall_total, 1e3 * output_wall_max);
     return benchmark_report(wall_seconds() - start_wall, process_cpu_seconds() - start_cpu,
-                            steps_total_ - start_steps, sim_time() - start_sim,
-                            step_cpu_total_ - start_step_cpu);
+                            stats_.steps_total - start_steps, sim_time() - start_sim,
+                            stats_.step_cpu_total - start_step_cpu);
   }
   return 0;
 }
@@ -641,7 +376,7 @@ int SimNode::run() {
 int SimNode::benchmark_report(double wall, double cpu, unsigned long steps, double sim,
                               double step_cpu) {
   // The bare library on the same scene: the same number of steps in a tight loop, no ROS.
-  corde::World bare = initial_.world;
+  corde::World bare = scene_.initial().world;
   const double c0 = thread_cpu_seconds();
   for (unsigned long i = 0; i < steps; ++i) bare.step();
   const double bare_cpu = thread_cpu_seconds() - c0;
@@ -668,6 +403,55 @@ int SimNode::benchmark_report(double wall, double cpu, unsigned long steps, doub
       wall, steps, sim, sim / wall, cpu, step_cpu, bare_cpu, 100.0 * outside, 100.0 * total);
   std::fflush(stdout);
   return 0;
+}
+
+void SimNode::check_holders_and_strain() {
+  for (const auto& kv : grasps_.grasps()) {
+    const corde::GraspState& g = kv.second;
+    if (!g.clip.any()) continue;
+    ROS_WARN_THROTTLE(2.0,
+                      "corde_sim: grasp '%s': holder motion limited to %s (it lags its commanded "
+                      "pose; ~holder_max_speed %g m/s, ~holder_max_acceleration %g m/s^2)",
+                      kv.first.c_str(), g.clip.speed ? "the speed limit" : "the acceleration limit",
+                      params_.holder_max_speed, params_.holder_max_acceleration);
+    grasps_.find(kv.first)->clip = corde::HolderClip();
+  }
+  // strain_warning_ stays until the next diagnostics report (diagnose() clears it), so that a short
+  // overstretch (which may end with a slip) is still reported.
+  for (size_t r = 0; r < world_.rods().size(); ++r) {
+    const corde::Rod& rod = world_.rods()[r];
+    const double limit = rod.section().max_strain;
+    if (!(limit > 0.0)) continue;
+    int seg = 0;
+    const double strain = rod.max_stretch_strain(&seg);
+    if (strain <= limit) continue;
+    stats_.strain_warning = "rod '" + rod.name() + "' stretched by " + num(100.0 * strain) +
+                            "% at segment " + std::to_string(seg) +
+                            ", above its material's max_strain " + num(100.0 * limit) +
+                            "% (length " + num(rod.length()) + " m)";
+    ROS_WARN_THROTTLE(2.0, "corde_sim: %s", stats_.strain_warning.c_str());
+    if (params_.strain_action != StrainAction::kSlip) continue;
+    // The holder nearest to the overstretched segment lets go, as a real grip slips first there.
+    std::string nearest;
+    int best = 1 << 30;
+    for (const auto& kv : grasps_.grasps())
+      if (kv.second.held && kv.second.rod == static_cast<int>(r) &&
+          std::abs(kv.second.grasp.segment - seg) < best) {
+        best = std::abs(kv.second.grasp.segment - seg);
+        nearest = kv.first;
+      }
+    if (!nearest.empty()) {
+      sim_.submit(corde::Command::release(world_.time(), nearest));
+      sim_.apply_due();
+      scene_.end_script(nearest, "slipped");
+      // As a release by service: a rollback must not hold the segment again (grasps_ goes back
+      // with the world), the node having said that it slipped.
+      sim_.mark_good();
+      ROS_WARN("corde_sim: grasp '%s' slipped (~strain_action slip): %s", nearest.c_str(),
+               stats_.strain_warning.c_str());
+      outputs_.refresh_layout();
+    }
+  }
 }
 
 }  // namespace corde_sim

@@ -13,6 +13,8 @@ import rospy
 import rostest
 
 import corde_rostest as ct
+from corde_sim.srv import ListGrasps
+from geometry_msgs.msg import WrenchStamped
 
 N = 10
 H = 2.5e-4  # s
@@ -127,6 +129,26 @@ class GraspRelease(unittest.TestCase):
         self.assertTrue(r.success, r.message)
         self.assertEqual(r.segment, 9)
         self.assert_held(self.sim.fresh_state(), 9)
+
+    def test_6_wrench_sent_before_release_applies_before_it(self):
+        # Paused, so the wrench waits in the node until the ~release: inputs and services take
+        # effect in the order they arrived. The released grasp keeps its wrench (and its entry).
+        r = self.sim.grasp("pushed", arc_length=0.325)
+        self.assertTrue(r.success, r.message)
+        pub = rospy.Publisher("/grasps/pushed/wrench", WrenchStamped, queue_size=5)
+        self.assertTrue(ct.wait_connected(pub))
+        w = WrenchStamped()
+        w.header.frame_id = "world"
+        w.header.stamp = rospy.Time.now()
+        w.wrench.force.z = -0.5
+        pub.publish(w)
+        time.sleep(0.5)  # received and queued by the node
+        r = self.sim.release("pushed")
+        self.assertTrue(r.success, r.message)
+        self.assertNotIn("topics end", r.message)
+        listed = self.sim.service("list_grasps", ListGrasps)()
+        self.assertIn("pushed", listed.names)
+        self.assertFalse(listed.held[listed.names.index("pushed")])
 
 
 if __name__ == "__main__":

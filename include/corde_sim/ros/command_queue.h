@@ -7,10 +7,10 @@
 //   serves the global callback queue (topic callbacks, tf input, publisher connections,
 //   diagnostics) between batches of steps, polls tf for followed frames, drains this queue, steps,
 //   and publishes what is due. Nothing else touches the simulation.
-// - Service threads (their own callback queue and spinner) turn each request into a command and
-//   wait until the loop has applied it; the work that needs no simulation state (reading a scene
-//   file, its statics and automatic choices, a trial step of a candidate world) runs there, so
-//   that the loop keeps its output rates meanwhile.
+// - Service threads (NodeServices on their own callback queue and spinner) turn each request
+//   into a command and wait until the loop has applied it; the work that needs no simulation
+//   state (reading a scene file, its statics and automatic choices, a trial step of a candidate
+//   world) runs there, so that the loop keeps its output rates meanwhile.
 // - dynamic_reconfigure runs on its own queue and thread (its server writes every parameter to
 //   the master); its callback checks the values, queues them and waits like a service.
 // A callback never blocks the loop: the loop only takes commands and sets replies.

@@ -19,6 +19,17 @@ class Pacer {
   void anchor(double sim_time, double wall_time) {
     sim_anchor_ = sim_time;
     wall_anchor_ = wall_time;
+    behind_since_ = -1.0;
+  }
+  // The wall time since which steps have been due but not all run (a batch stopped at an output
+  // and goes on after it), or a negative value: the caller's budget for a backlog counts from
+  // there. anchor() drops the backlog.
+  double behind_since() const { return behind_since_; }
+  void set_behind(bool behind, double wall_time) {
+    if (!behind)
+      behind_since_ = -1.0;
+    else if (behind_since_ < 0.0)
+      behind_since_ = wall_time;
   }
   static constexpr long kMaxDue = 1L << 40;
 
@@ -43,6 +54,7 @@ class Pacer {
  private:
   double factor_ = 1.0;
   double sim_anchor_ = 0.0, wall_anchor_ = 0.0;
+  double behind_since_ = -1.0;
 };
 
 }  // namespace corde_sim

@@ -128,12 +128,23 @@ class Simulation {
   // still).
   void submit(Command c);
   size_t pending_commands() const { return commands_.size() - next_; }
+  // Applies now, between steps, the waiting commands of the world's time (those the next step
+  // would apply first, in the same order): a caller that must answer at once (the node's
+  // ~release) sees their effect. They count as applied since the snapshot, so a rollback replays
+  // them at the step starting at their time, as if the next step had applied them.
+  void apply_due();
 
   // Paused, advance() runs only steps queued by queue_steps(); resuming drops those.
   void set_paused(bool paused);
   bool paused() const { return paused_; }
   void queue_steps(long n) { queued_steps_ += n; }
   long queued_steps() const { return queued_steps_; }
+  // Drops the queued steps (a reset, or the guard stopped); returns how many there were.
+  long drop_queued_steps() {
+    const long n = queued_steps_;
+    queued_steps_ = 0;
+    return n;
+  }
 
   // Advances by up to n of the user's steps (paused: at most the queued ones). Returns false when
   // the guard has given up: the world is then at its last good state and stays there until
@@ -165,6 +176,8 @@ class Simulation {
   };
   void step_once(World* w);
   void apply(World* w, const Command& c, bool first);
+  // Applies the waiting commands whose time is at most t, in order.
+  void apply_until(World* w, double t);
   void drive_scripts(World* w, double t, double h);
   void take_hold_exact(World* w, size_t k);
   void end_script_at(size_t k, double time, bool report);

@@ -209,6 +209,16 @@ void Simulation::submit(Command c) {
   commands_.insert(at, std::move(c));
 }
 
+void Simulation::apply_until(World* w, double t) {
+  while (next_ < commands_.size() && commands_[next_].time <= t) {
+    apply(w, commands_[next_], next_ >= applied_high_);
+    ++next_;
+    applied_high_ = std::max(applied_high_, next_);
+  }
+}
+
+void Simulation::apply_due() { apply_until(world_, world_->time()); }
+
 void Simulation::set_paused(bool paused) {
   paused_ = paused;
   if (!paused_) queued_steps_ = 0;
@@ -306,11 +316,7 @@ void Simulation::drive_scripts(World* w, double t, double h) {
 
 void Simulation::step_once(World* w) {
   const double t = w->time(), h = w->time_step;  // the guard's, while it runs a halved step
-  while (next_ < commands_.size() && commands_[next_].time <= t + 0.5 * h) {
-    apply(w, commands_[next_], next_ >= applied_high_);
-    ++next_;
-    applied_high_ = std::max(applied_high_, next_);
-  }
+  apply_until(w, t + 0.5 * h);
   if (!scripts_.empty()) drive_scripts(w, t, h);
   if (!grasps_.empty() && grasps_.before_step(*w, t, h, holder_limits_) > 0) report_stalls(*w, t);
   if (mover_) mover_(w, h);

@@ -32,6 +32,21 @@ TEST(Pacer, HugeBacklogIsClampedNotOverflowed) {
   EXPECT_EQ(p.steps_due(1e300, 0.0, 1e-3), 0);
 }
 
+TEST(Pacer, BacklogCountsFromWhenItBeganUntilAnchored) {
+  Pacer p;
+  p.reset(1.0, 0.0, 0.0);
+  EXPECT_LT(p.behind_since(), 0.0);
+  p.set_behind(true, 1.0);
+  p.set_behind(true, 2.0);  // still the same backlog
+  EXPECT_EQ(p.behind_since(), 1.0);
+  p.set_behind(false, 3.0);
+  EXPECT_LT(p.behind_since(), 0.0);
+  p.set_behind(true, 4.0);
+  EXPECT_EQ(p.behind_since(), 4.0);
+  p.anchor(4.0, 5.0);  // dropped
+  EXPECT_LT(p.behind_since(), 0.0);
+}
+
 TEST(Pacer, UnpacedNeverSchedules) {
   Pacer p;
   p.reset(0.0, 0.0, 0.0);

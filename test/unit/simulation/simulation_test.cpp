@@ -269,6 +269,49 @@ TEST(Simulation, GoalInputEndsAHolderScript) {
   EXPECT_EQ(count(sim.take_events(), SimulationEvent::Kind::kLetGo), 1);
 }
 
+// The node's ~release: a wrench and a release submitted at the world's time and applied at once,
+// in that order; a rollback to an older snapshot replays both, and the grasp stays released.
+TEST(Simulation, CommandsAppliedAtOnceAreReplayedAfterARollback) {
+  Simulation sim(every_8());
+  install_with_grasp(&sim);
+  ASSERT_TRUE(sim.advance(20));  // snapshot at step 16
+  const Vec3 f(0.0, 0.0, 0.5);
+  sim.submit(Command::wrench(sim.world().time(), "g", f, Vec3::Zero()));
+  sim.submit(Command::release(sim.world().time(), "g"));
+  sim.apply_due();
+  EXPECT_EQ(sim.pending_commands(), 0u);
+  EXPECT_FALSE(sim.grasps().find("g")->held);
+  EXPECT_TRUE(sim.grasps().find("g")->force.isApprox(f));
+  EXPECT_EQ(count(sim.take_events(), SimulationEvent::Kind::kLetGo), 1);
+  bool thrown = false;
+  sim.set_step_observer(throw_once_at(22 * kH, &thrown));
+  ASSERT_TRUE(sim.advance(8));
+  ASSERT_TRUE(thrown);
+  ASSERT_GE(sim.guard().rollbacks(), 1);
+  EXPECT_NEAR(sim.world().time(), 28 * kH, 1e-12);
+  // Back at step 16 the grasp held again; the replay let go at step 20 and the wrench acts.
+  EXPECT_FALSE(sim.grasps().find("g")->held);
+  EXPECT_TRUE(sim.grasps().find("g")->force.isApprox(f));
+  const Rod& rod = sim.world().rods()[0];
+  ASSERT_TRUE(rod.has_external());
+  EXPECT_TRUE(rod.external_forces()[10].isApprox(0.5 * f));
+  EXPECT_EQ(count(sim.take_events(), SimulationEvent::Kind::kLetGo), 0);  // reported once
+}
+
+// A command of a later time waits for its step.
+TEST(Simulation, ApplyDueLeavesLaterCommandsWaiting) {
+  Simulation sim(every_8());
+  install_with_grasp(&sim);
+  sim.submit(Command::release(3 * kH, "g"));
+  sim.apply_due();
+  EXPECT_TRUE(sim.grasps().find("g")->held);
+  EXPECT_EQ(sim.pending_commands(), 1u);
+  ASSERT_TRUE(sim.advance(3));
+  EXPECT_TRUE(sim.grasps().find("g")->held);
+  ASSERT_TRUE(sim.advance(1));
+  EXPECT_FALSE(sim.grasps().find("g")->held);
+}
+
 TEST(Simulation, PausedRunsOnlyQueuedSteps) {
   Simulation sim(every_8());
   install_with_grasp(&sim);
@@ -287,6 +330,12 @@ TEST(Simulation, PausedRunsOnlyQueuedSteps) {
   ASSERT_TRUE(sim.advance(2));
   EXPECT_EQ(sim.queued_steps(), 3);
   sim.set_paused(false);  // resuming drops the queued steps
+  EXPECT_EQ(sim.queued_steps(), 0);
+  ASSERT_TRUE(sim.advance(4));
+  EXPECT_NEAR(sim.world().time(), 9 * kH, 1e-12);
+  sim.set_paused(true);
+  sim.queue_steps(4);
+  EXPECT_EQ(sim.drop_queued_steps(), 4);
   EXPECT_EQ(sim.queued_steps(), 0);
   ASSERT_TRUE(sim.advance(4));
   EXPECT_NEAR(sim.world().time(), 9 * kH, 1e-12);

@@ -1,5 +1,8 @@
-// SimNode: the private services (reset, configure, pause, step, grasp, release). Each callback
-// runs on a service thread and waits for its command to be applied by the loop (command_queue.h).
+// NodeServices: the private services (reset, configure, pause, step, grasp, release,
+// list_grasps). Each callback runs on a service thread and waits for its command to be applied by
+// the loop (command_queue.h).
+#include "corde_sim/ros/node_services.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -89,41 +92,98 @@ struct RunningCopy {
   std::string stopped_note, scene_path;
 };
 
+// Where ~grasp's request takes hold of `rod`: the node nearest to its point (within
+// max_distance), or its arc length. "" or why not.
+std::string grasp_place(const Grasp::Request& req, const corde::Rod& rod, double max_distance,
+                        corde::GraspSpec* spec) {
+  if (req.use_point) {
+    const Eigen::Vector3d p(req.point.x, req.point.y, req.point.z);
+    if (!p.allFinite()) return "point is not finite";
+    // Nearest point of the centreline; grasped by node index (segment k is node k's segment).
+    int best = 0;
+    double best_d = std::numeric_limits<double>::infinity();
+    for (int s = 0; s < rod.num_segments(); ++s) {
+      const Eigen::Vector3d a = rod.positions()[s], ab = rod.positions()[s + 1] - a;
+      const double u = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+      const double d = (a + u * ab - p).norm();
+      if (d < best_d) {
+        best_d = d;
+        best = s;
+      }
+    }
+    if (best_d > max_distance)
+      return "point is " + num(best_d) + " m from rod '" + req.rod +
+             "' (nearest point of its centreline), farther than ~max_grasp_distance " +
+             num(max_distance) + " m";
+    spec->place = corde::GraspSpec::Place::kNode;
+    spec->value = best;
+  } else {
+    double length = 0.0;
+    for (double l : rod.rest_lengths()) length += l;
+    if (!std::isfinite(req.arc_length) || req.arc_length < 0.0 || req.arc_length > length)
+      return "arc_length " + num(req.arc_length) + " m is outside rod '" + req.rod +
+             "' (rest length " + num(length) + " m)";
+    spec->place = corde::GraspSpec::Place::kArcLength;
+    spec->value = req.arc_length;
+  }
+  return "";
+}
+
 constexpr const char* kQueuedNote =
     "; they run while paused, in batches with rod_state and tf between them (unpausing or ~reset "
     "drops them)";
 
 }  // namespace
 
-std::string SimNode::stopped_note() const {
-  return guard_.failed() ? "; the simulation is still stopped at its last good state (stability "
-                           "guard: " +
-                               last_problem_ + ")"
-                         : "";
+void NodeServices::advertise(const ros::NodeHandle& pnh) {
+  threads_ = std::make_unique<ServiceThreads>(pnh);
+  threads_->advertise("reset", &NodeServices::on_reset, this);
+  threads_->advertise("configure", &NodeServices::on_configure, this);
+  threads_->advertise("pause", &NodeServices::on_pause, this);
+  threads_->advertise("step", &NodeServices::on_step, this);
+  threads_->advertise("grasp", &NodeServices::on_grasp, this);
+  threads_->advertise("release", &NodeServices::on_release, this);
+  threads_->advertise("list_grasps", &NodeServices::on_list_grasps, this);
 }
 
-bool SimNode::on_reset(Reset::Request& req, Reset::Response& res) {
+void NodeServices::close() {
+  if (!step_call_) return;
+  step_call_->res->success = false;
+  step_call_->res->message = "the node is shutting down";
+  step_call_->reply->set();
+  step_call_.reset();
+}
+
+std::string NodeServices::stopped_note() const {
+  return node_.guard_.failed()
+             ? "; the simulation is still stopped at its last good state (stability "
+               "guard: " +
+                   node_.stats_.last_problem + ")"
+             : "";
+}
+
+bool NodeServices::on_reset(Reset::Request& req, Reset::Response& res) {
   reset(req, res);
   res.message = clip_reply(res.message);
   return true;
 }
 
-bool SimNode::on_configure(Configure::Request& req, Configure::Response& res) {
+bool NodeServices::on_configure(Configure::Request& req, Configure::Response& res) {
   configure(req, res);
   res.message = clip_reply(res.message);
   return true;
 }
 
-void SimNode::reset(Reset::Request& req, Reset::Response& res) {
+void NodeServices::reset(Reset::Request& req, Reset::Response& res) {
   // On this thread: finding, reading and checking the scene (its statics and automatic choices
   // included) and a trial step. The loop installs it in one go (install_scene).
   RunningCopy now;
   if (!in_loop([&] {
-        now.world = world_;
+        now.world = node_.world_;
         own_obstacles(&now.world);
-        now.step_time_us = step_time_us_;
+        now.step_time_us = node_.stats_.step_time_us;
         now.stopped_note = stopped_note();
-        now.scene_path = scene_path_;
+        now.scene_path = node_.scene_.path();
       })) {
     res.success = false;
     res.message = "the node is shutting down";
@@ -133,7 +193,7 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   std::string path = now.scene_path;
   if (!req.scene.empty()) {
     std::string error;
-    path = req.scene.size() > 4096 ? "" : resolve_scene(req.scene, &error);
+    path = req.scene.size() > 4096 ? "" : node_.scene_.resolve_scene(req.scene, &error);
     if (path.empty()) {
       res.message = "scene not loaded, state unchanged: " +
                     (error.empty() ? "scene path '" + clip(req.scene) + "' is too long" : error) +
@@ -152,8 +212,8 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   corde::Scene scene;
   try {
     // The ~overrides apply to the scene file given at start-up only.
-    scene = path == params_.scene ? corde::load_scene(path, params_.overrides)
-                                  : corde::load_scene(path);
+    scene = path == node_.params_.scene ? corde::load_scene(path, node_.params_.overrides)
+                                        : corde::load_scene(path);
   } catch (const std::exception& e) {
     res.message =
         "scene not loaded, state unchanged: " + clip_all(e.what(), path) + now.stopped_note;
@@ -166,42 +226,41 @@ void SimNode::reset(Reset::Request& req, Reset::Response& res) {
   }
   if (!in_loop([&] {
         // The new world starts at its own time 0; the node's clock continues from where it was.
-        const double t = sim_time();
-        const std::string error = install_scene(std::move(scene), path);
+        const double t = node_.sim_time();
+        // (The driver drops the queued steps with its old world.)
+        const long queued = node_.sim_.queued_steps();
+        const std::string error = node_.scene_.install_scene(std::move(scene), path);
         if (!error.empty()) {
           res.message = "scene not used, state unchanged: " + error + stopped_note();
           return;
         }
-        time_offset_ = t;
-        bump_time();
-        pacer_.anchor(sim_time(), wall_seconds());
+        node_.time_offset_ = t;
+        node_.bump_time();
+        node_.pacer_.anchor(node_.sim_time(), wall_seconds());
         res.success = true;
-        res.message =
-            "reset to '" + clip(path) + "' at t = " + num(sim_time()) + " s" + guard_note_;
-        guard_note_.clear();
-        if (queued_steps_ > 0) {
-          res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
-          queued_steps_ = 0;
-        }
+        res.message = "reset to '" + clip(path) + "' at t = " + num(node_.sim_time()) + " s" +
+                      node_.scene_.take_guard_note();
+        if (queued > 0)
+          res.message += "; dropped " + std::to_string(queued) + " queued ~step step(s)";
         ROS_INFO("corde_sim: %s", res.message.c_str());
       }))
     res.message = "the node is shutting down";
 }
 
-std::string SimNode::configured_copy(const Configure::Request& req, corde::World* world,
-                                     SimSettings* settings, std::vector<std::string>* resample,
-                                     std::string* summary) const {
+std::string NodeServices::configured_copy(const Configure::Request& req, corde::World* world,
+                                          SimSettings* settings, std::vector<std::string>* resample,
+                                          std::string* summary) const {
   ConfigurePlan plan;
   const std::string error = plan_configure(
-      world_, req.rod, req.keys, req.values, req.flags,
+      node_.world_, req.rod, req.keys, req.values, req.flags,
       std::vector<bool>(req.flag_values.begin(), req.flag_values.end()), req.integrator, &plan);
   if (!error.empty()) return error;
-  *world = world_;
-  *settings = settings_;
+  *world = node_.world_;
+  *settings = node_.settings_;
   try {
     // A resampled rod loses its segment indices: take the grasps' drives off first, re-grasp
     // after (GraspSet::remake_on).
-    for (const auto& kv : grasps_.grasps())
+    for (const auto& kv : node_.grasps_.grasps())
       if (kv.second.held && std::find(plan.resample.begin(), plan.resample.end(),
                                       kv.second.grasp.rod) != plan.resample.end())
         corde::release(world->rods()[kv.second.rod], kv.second.grasp);
@@ -213,7 +272,7 @@ std::string SimNode::configured_copy(const Configure::Request& req, corde::World
   // already ran at); the implicit one has none to check.
   std::string limiting;
   const double margin = explicit_margin(*world, &limiting);
-  if (!std::isfinite(margin) || margin > std::max(1.0, stability_margin_))
+  if (!std::isfinite(margin) || margin > std::max(1.0, node_.stats_.stability_margin))
     return "rejected, nothing changed: time_step " + num(world->time_step) +
            " s would exceed the stability limit of rod '" + limiting + "' for " +
            corde::integrator_name(world->integrator) + " (h/h_crit " + num(margin) +
@@ -222,7 +281,7 @@ std::string SimNode::configured_copy(const Configure::Request& req, corde::World
   return "";
 }
 
-void SimNode::configure(Configure::Request& req, Configure::Response& res) {
+void NodeServices::configure(Configure::Request& req, Configure::Response& res) {
   // The loop applies the request to a copy of the world; this thread times a step of it; the loop
   // then applies it again to the world as it is by then (it may have run on) and installs that.
   corde::World world;
@@ -236,10 +295,10 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
         if (!error.empty()) error += stopped_note();
         if (error.empty()) {
           own_obstacles(&world);
-          now.world = world_;
+          now.world = node_.world_;
           own_obstacles(&now.world);
         }
-        now.step_time_us = step_time_us_;
+        now.step_time_us = node_.stats_.step_time_us;
         now.stopped_note = stopped_note();
       })) {
     res.message = "the node is shutting down";
@@ -263,27 +322,29 @@ void SimNode::configure(Configure::Request& req, Configure::Response& res) {
       res.message = error + stopped_note();
       return;
     }
-    std::swap(world_, world);
-    settings_ = settings;
+    std::swap(node_.world_, world);
+    node_.settings_ = settings;
     for (const std::string& rod : resample)
-      for (size_t i = 0; i < world_.rods().size(); ++i)
-        if (world_.rods()[i].name() == rod) grasps_.remake_on(world_, static_cast<int>(i));
-    const std::string note = restart_guard();
-    bump_time();
-    refresh_layout();
+      for (size_t i = 0; i < node_.world_.rods().size(); ++i)
+        if (node_.world_.rods()[i].name() == rod)
+          node_.grasps_.remake_on(node_.world_, static_cast<int>(i));
+    const std::string note = node_.restart_guard();
+    node_.bump_time();
+    node_.outputs_.refresh_layout();
     res.success = true;
     res.message = "configured " +
                   (req.rod.empty() ? std::string("all rods") : "rod '" + clip(req.rod) + "'") +
-                  ": " + summary + "(" + corde::integrator_name(world_.integrator) +
-                  (corde::is_implicit(world_.integrator) ? std::string(", no explicit step limit")
-                                                         : ", h/h_crit " + num(stability_margin_)) +
+                  ": " + summary + "(" + corde::integrator_name(node_.world_.integrator) +
+                  (corde::is_implicit(node_.world_.integrator)
+                       ? std::string(", no explicit step limit")
+                       : ", h/h_crit " + num(node_.stats_.stability_margin)) +
                   ")" + note;
     ROS_INFO("corde_sim: %s", res.message.c_str());
   });
   if (!applied) res.message = "the node is shutting down";
 }
 
-bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+bool NodeServices::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
   if (!in_loop([&] { pause(req, res); })) {
     res.success = false;
     res.message = "the node is shutting down";
@@ -291,89 +352,90 @@ bool SimNode::on_pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Respo
   return true;
 }
 
-void SimNode::pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
-  if (paused_ != static_cast<bool>(req.data)) {
-    paused_ = req.data;
-    if (!paused_) pacer_.anchor(sim_time(), wall_seconds());  // no backlog from the pause
+void NodeServices::pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Response& res) {
+  const long queued = node_.sim_.queued_steps();
+  if (node_.sim_.paused() != static_cast<bool>(req.data)) {
+    node_.sim_.set_paused(req.data);  // resuming drops the queued steps
+    if (!node_.sim_.paused())
+      node_.pacer_.anchor(node_.sim_time(), wall_seconds());  // no backlog from the pause
   }
   res.success = true;
-  res.message = std::string(paused_ ? "paused" : "running") + " at t = " + num(sim_time()) + " s";
-  if (!paused_ && queued_steps_ > 0) {
-    res.message += "; dropped " + std::to_string(queued_steps_) + " queued ~step step(s)";
-    queued_steps_ = 0;
-  }
+  res.message = std::string(node_.sim_.paused() ? "paused" : "running") +
+                " at t = " + num(node_.sim_time()) + " s";
+  if (!node_.sim_.paused() && queued > 0)
+    res.message += "; dropped " + std::to_string(queued) + " queued ~step step(s)";
 }
 
-bool SimNode::on_step(Step::Request& req, Step::Response& res) {
+bool NodeServices::on_step(Step::Request& req, Step::Response& res) {
   // The loop answers once the steps are run (or after kStepCallSeconds, the rest queued).
-  if (!commands_.call([&](const ReplyPtr& reply) { start_step_call(req, &res, reply); })) {
+  if (!node_.commands_.call([&](const ReplyPtr& reply) { start_step_call(req, &res, reply); })) {
     res.success = false;
     res.message = "the node is shutting down";
   }
   return true;
 }
 
-void SimNode::start_step_call(const Step::Request& req, Step::Response* res,
-                              const ReplyPtr& reply) {
-  res->time = sim_time();
+void NodeServices::start_step_call(const Step::Request& req, Step::Response* res,
+                                   const ReplyPtr& reply) {
+  res->time = node_.sim_time();
   res->success = false;
-  if (!paused_)
+  const long queued = node_.sim_.queued_steps();
+  if (!node_.sim_.paused())
     res->message = "not paused: call ~pause with data: true first";
   else if (req.steps < 1 || req.steps > 10000000)
     res->message = "steps must be in [1, 10000000], got " + std::to_string(req.steps);
-  else if (queued_steps_ + req.steps > kMaxQueuedSteps)
-    res->message = std::to_string(queued_steps_) + " step(s) are still queued; at most " +
+  else if (queued + req.steps > kMaxQueuedSteps)
+    res->message = std::to_string(queued) + " step(s) are still queued; at most " +
                    std::to_string(kMaxQueuedSteps) + " may wait";
   if (!res->message.empty()) {
     reply->set();
     return;
   }
-  if (queued_steps_ > 0) {  // after the ones waiting (their call was answered)
-    queued_steps_ += req.steps;
+  node_.sim_.queue_steps(req.steps);
+  if (queued > 0) {  // after the ones waiting (their call was answered)
     res->success = true;
     res->message = "queued " + std::to_string(req.steps) + " step(s) behind " +
-                   std::to_string(queued_steps_ - req.steps) + " still queued" + kQueuedNote;
+                   std::to_string(queued) + " still queued" + kQueuedNote;
     reply->set();
     return;
   }
   // Run by the loop in slices with the outputs between (run_queued_steps); answered by
   // answer_step_call().
-  queued_steps_ = req.steps;
   step_call_ = std::make_unique<StepCall>();
   step_call_->reply = reply;
   step_call_->res = res;
   step_call_->requested = req.steps;
-  step_call_->steps_before = static_cast<long>(steps_total_);
-  step_call_->detections_before = recoveries_;
+  step_call_->steps_before = static_cast<long>(node_.stats_.steps_total);
+  step_call_->detections_before = node_.stats_.recoveries;
   step_call_->answer_by = wall_seconds() + kStepCallSeconds;
 }
 
-void SimNode::answer_step_call(double now) {
+void NodeServices::answer_step_call(double now) {
   StepCall& c = *step_call_;
-  const bool stopped = guard_.failed();
-  if (queued_steps_ > 0 && !stopped && paused_ && now < c.answer_by) return;
+  const bool stopped = node_.guard_.failed();
+  const long queued = node_.sim_.queued_steps();
+  if (queued > 0 && !stopped && node_.sim_.paused() && now < c.answer_by) return;
   Step::Response& res = *c.res;
-  const long done = static_cast<long>(steps_total_) - c.steps_before;
-  res.time = sim_time();
+  const long done = static_cast<long>(node_.stats_.steps_total) - c.steps_before;
+  res.time = node_.sim_time();
   res.success = !stopped;
   const std::string stepped = "stepped " + std::to_string(done) + " step(s)";
-  res.message =
-      stopped ? "stopped at the last good state: the stability guard could not "
-                "recover (" +
-                    last_problem_ + "); ~reset or ~configure to resume"
-      : recoveries_ > c.detections_before
-          ? stepped + "; the stability guard rolled back and retried (" + last_problem_ + ")"
-          : stepped;
-  if (!stopped && done < c.requested && queued_steps_ == 0)
+  res.message = stopped ? "stopped at the last good state: the stability guard could not "
+                          "recover (" +
+                              node_.stats_.last_problem + "); ~reset or ~configure to resume"
+                : node_.stats_.recoveries > c.detections_before
+                    ? stepped + "; the stability guard rolled back and retried (" +
+                          node_.stats_.last_problem + ")"
+                    : stepped;
+  if (!stopped && done < c.requested && queued == 0)
     res.message +=
         "; the other " + std::to_string(c.requested - done) + " were dropped (~pause, ~reset)";
-  if (queued_steps_ > 0)
-    res.message += "; queued the other " + std::to_string(queued_steps_) + kQueuedNote;
+  if (queued > 0) res.message += "; queued the other " + std::to_string(queued) + kQueuedNote;
   c.reply->set();  // (res belongs to the caller from here on)
   step_call_.reset();
 }
 
-bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
+bool NodeServices::on_grasp(Grasp::Request& req, Grasp::Response& res) {
   bool ok = true;
   if (!in_loop([&] { ok = grasp(req, res); })) {
     res.success = false;
@@ -383,7 +445,7 @@ bool SimNode::on_grasp(Grasp::Request& req, Grasp::Response& res) {
   return ok;
 }
 
-bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
+bool NodeServices::grasp(Grasp::Request& req, Grasp::Response& res) {
   res.segment = -1;
   // Names become topics and tf frames: bounded, and checked before anything echoes them whole.
   for (const auto& n :
@@ -401,10 +463,11 @@ bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
     res.message = "frame '" + clip(req.frame) + "' has characters other than [A-Za-z0-9_/.-]";
     return true;
   }
-  if (!grasps_.find(req.name) && grasps_.grasps().size() >= static_cast<size_t>(kMaxGrasps)) {
+  if (!node_.grasps_.find(req.name) &&
+      node_.grasps_.grasps().size() >= static_cast<size_t>(kMaxGrasps)) {
     res.success = false;
     res.message = "grasp '" + clip(req.name) + "' refused: the node has " +
-                  std::to_string(grasps_.grasps().size()) + " grasps, at most " +
+                  std::to_string(node_.grasps_.grasps().size()) + " grasps, at most " +
                   std::to_string(kMaxGrasps) + " (release a grasp made through ~grasp first)";
     return true;
   }
@@ -421,55 +484,22 @@ bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
   spec.rod = req.rod;
   spec.hold_orientation = true;
   const corde::Rod* rod = nullptr;
-  for (const corde::Rod& r : world_.rods())
+  for (const corde::Rod& r : node_.world_.rods())
     if (r.name() == req.rod) rod = &r;
   if (!rod) {
     res.success = false;
     res.message = "no rod named '" + req.rod + "'";
     return true;
   }
-  if (req.use_point) {
-    const Eigen::Vector3d p(req.point.x, req.point.y, req.point.z);
-    if (!p.allFinite()) {
-      res.success = false;
-      res.message = "point is not finite";
-      return true;
-    }
-    // Nearest point of the centreline; grasped by node index (segment k is node k's segment).
-    int best = 0;
-    double best_d = std::numeric_limits<double>::infinity();
-    for (int s = 0; s < rod->num_segments(); ++s) {
-      const Eigen::Vector3d a = rod->positions()[s], ab = rod->positions()[s + 1] - a;
-      const double u = std::clamp((p - a).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
-      const double d = (a + u * ab - p).norm();
-      if (d < best_d) {
-        best_d = d;
-        best = s;
-      }
-    }
-    if (best_d > params_.max_grasp_distance) {
-      res.success = false;
-      res.message = "point is " + num(best_d) + " m from rod '" + req.rod +
-                    "' (nearest point of its centreline), farther than ~max_grasp_distance " +
-                    num(params_.max_grasp_distance) + " m";
-      return true;
-    }
-    spec.place = corde::GraspSpec::Place::kNode;
-    spec.value = best;
-  } else {
-    double length = 0.0;
-    for (double l : rod->rest_lengths()) length += l;
-    if (!std::isfinite(req.arc_length) || req.arc_length < 0.0 || req.arc_length > length) {
-      res.success = false;
-      res.message = "arc_length " + num(req.arc_length) + " m is outside rod '" + req.rod +
-                    "' (rest length " + num(length) + " m)";
-      return true;
-    }
-    spec.place = corde::GraspSpec::Place::kArcLength;
-    spec.value = req.arc_length;
+  const std::string place = grasp_place(req, *rod, node_.params_.max_grasp_distance, &spec);
+  if (!place.empty()) {
+    res.success = false;
+    res.message = place;
+    return true;
   }
   int segment = -1;
-  const std::string error = add_grasp(spec, source, req.frame, /*from_scene=*/false, &segment);
+  const std::string error =
+      node_.scene_.add_grasp(spec, source, req.frame, /*from_scene=*/false, &segment);
   if (!error.empty()) {
     res.success = false;
     res.message = error;
@@ -480,13 +510,13 @@ bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res) {
   res.message = "grasp '" + req.name + "' holds segment " + std::to_string(segment) + " of rod '" +
                 req.rod + "' (source " + to_string(source) + ")";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  sim_.mark_good();  // a rollback goes back to the grasp, not to before it
-  bump_time();
-  refresh_layout();
+  node_.sim_.mark_good();  // a rollback goes back to the grasp, not to before it
+  node_.bump_time();
+  node_.outputs_.refresh_layout();
   return true;
 }
 
-bool SimNode::on_release(Release::Request& req, Release::Response& res) {
+bool NodeServices::on_release(Release::Request& req, Release::Response& res) {
   if (!in_loop([&] { release(req, res); })) {
     res.success = false;
     res.message = "the node is shutting down";
@@ -494,16 +524,16 @@ bool SimNode::on_release(Release::Request& req, Release::Response& res) {
   return true;
 }
 
-void SimNode::release(Release::Request& req, Release::Response& res) {
+void NodeServices::release(Release::Request& req, Release::Response& res) {
   if (req.name.size() > kMaxNameLength) {
     res.success = false;
     res.message = "no grasp named '" + clip(req.name) + "'";
     return;
   }
-  const corde::GraspState* g = grasps_.find(req.name);
-  if (waiting_to_take_hold(req.name)) {
+  const corde::GraspState* g = node_.grasps_.find(req.name);
+  if (node_.scene_.waiting_to_take_hold(req.name)) {
     // A scene grasp waiting for its grasp_time: it will not take hold.
-    end_script(req.name, "was released (~release) before its grasp_time");
+    node_.scene_.end_script(req.name, "was released (~release) before its grasp_time");
     res.success = true;
     res.message = "grasp '" + req.name + "' will not take hold (its scene script ended)";
     ROS_INFO("corde_sim: %s", res.message.c_str());
@@ -515,35 +545,38 @@ void SimNode::release(Release::Request& req, Release::Response& res) {
         !g ? "no grasp named '" + req.name + "'" : "grasp '" + req.name + "' is already released";
     return;
   }
-  grasps_.release(world_, req.name);
-  end_script(req.name, "was released (~release)");
+  // Through the driver, behind the inputs that arrived before it: a wrench sent before the
+  // release applies first. Applied now, so that the reply and ~list_grasps show it.
+  node_.sim_.submit(corde::Command::release(node_.world_.time(), req.name));
+  node_.sim_.apply_due();
+  node_.scene_.end_script(req.name, "was released (~release)");
   res.success = true;
   res.message = "released grasp '" + req.name + "'";
-  if (forget_grasp(req.name)) res.message += " (made through ~grasp: its topics end)";
+  if (node_.scene_.forget_grasp(req.name)) res.message += " (made through ~grasp: its topics end)";
   ROS_INFO("corde_sim: %s", res.message.c_str());
-  sim_.mark_good();
-  bump_time();
-  refresh_layout();
+  node_.sim_.mark_good();
+  node_.bump_time();
+  node_.outputs_.refresh_layout();
 }
 
-bool SimNode::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
+bool NodeServices::on_list_grasps(ListGrasps::Request&, ListGrasps::Response& res) {
   return in_loop([&] { list_grasps(res); });  // (fails the call when the node shuts down)
 }
 
-void SimNode::list_grasps(ListGrasps::Response& res) const {
-  for (const auto& kv : grasps_.grasps()) {
+void NodeServices::list_grasps(ListGrasps::Response& res) const {
+  for (const auto& kv : node_.grasps_.grasps()) {
     const corde::GraspState& g = kv.second;
-    auto w = wiring_.find(kv.first);
+    auto w = node_.wiring_.find(kv.first);
     res.names.push_back(kv.first);
     res.rods.push_back(g.grasp.rod);
     res.segments.push_back(g.grasp.segment);
     res.arc_lengths.push_back(g.arc_length);
     // "scripted" while the scene's script (keyframes, grasp and release times) runs the grasp
     // (until an input for it).
-    res.sources.push_back(w == wiring_.end()   ? ""
-                          : w->second.scripted ? "scripted"
-                                               : to_string(w->second.source));
-    res.frames.push_back(w == wiring_.end() ? "" : w->second.frame);
+    res.sources.push_back(w == node_.wiring_.end() ? ""
+                          : w->second.scripted     ? "scripted"
+                                                   : to_string(w->second.source));
+    res.frames.push_back(w == node_.wiring_.end() ? "" : w->second.frame);
     res.held.push_back(g.held);
     const Eigen::Isometry3d h = g.holder_pose();
     const Eigen::Quaterniond q(h.linear());
@@ -557,6 +590,13 @@ void SimNode::list_grasps(ListGrasps::Response& res) const {
     p.orientation.w = q.w();
     res.holders.push_back(p);
   }
+}
+
+bool NodeServices::in_loop(const std::function<void()>& fn) {
+  return node_.commands_.call([&fn](const ReplyPtr& reply) {
+    fn();
+    reply->set();
+  });
 }
 
 }  // namespace corde_sim
