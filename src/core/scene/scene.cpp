@@ -263,19 +263,18 @@ std::vector<Value> limited_items(const Value& list, int limit, const char* what)
 Drag read_drag(const Value& v, double radius) {
   Map m(v);
   Drag d;
-  constexpr double kMax = SceneBounds::max_coefficient;
-  if (auto p = m.find("linear_normal")) d.linear_normal = p->non_negative(kMax, "N s/m^2");
-  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->non_negative(kMax, "N s/m^2");
-  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->non_negative(kMax, "N s^2/m^3");
+  if (auto p = m.find("linear_normal")) d.linear_normal = p->in_range("linear_normal");
+  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->in_range("linear_tangential");
+  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->in_range("quadratic_normal");
   if (auto p = m.find("quadratic_tangential"))
-    d.quadratic_tangential = p->non_negative(kMax, "N s^2/m^3");
+    d.quadratic_tangential = p->in_range("quadratic_tangential");
   if (auto rho = m.find("fluid_density")) {
     if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
       rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
-    const double density = rho->non_negative(SceneBounds::max_density, "kg/m^3");
+    const double density = rho->in_range("fluid_density");
     double cd = 1.2, cf = 0.0;
-    if (auto p = m.find("drag_coefficient")) cd = p->non_negative(SceneBounds::max_factor, "");
-    if (auto p = m.find("friction_coefficient")) cf = p->non_negative(SceneBounds::max_factor, "");
+    if (auto p = m.find("drag_coefficient")) cd = p->in_range("drag_coefficient");
+    if (auto p = m.find("friction_coefficient")) cf = p->in_range("friction_coefficient");
     d.quadratic_normal = density * cd * radius;
     d.quadratic_tangential = density * cf * M_PI * radius;
   } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
@@ -495,14 +494,14 @@ void choose_step(Scene* scene, const Value* given, bool integrator_auto) {
     scene->world.integrator = c.integrator;
     scene->world.time_step = c.time_step;
     scene->notes.push_back(c.reason);
-  } else if (is_implicit(scene->world.integrator) && !given) {
+  } else if (!has_explicit_step_limit(scene->world.integrator) && !given) {
     const ImplicitStepChoice s = implicit_time_step(*scene);
     scene->world.time_step = s.time_step;
     scene->notes.push_back("time_step: auto chose " + num(s.time_step) + " s for " +
                            integrator_name(scene->world.integrator) + ", set by " + s.why);
   }
   // The implicit methods have no stability limit to check.
-  if (!is_implicit(scene->world.integrator)) check_time_step(scene, given);
+  if (has_explicit_step_limit(scene->world.integrator)) check_time_step(scene, given);
 }
 
 std::string stem(const std::string& path) {
