@@ -5,6 +5,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+
 #include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/io/file_read.h"
 #include "corde_sim/scene/scene_bounds.h"
@@ -21,6 +23,81 @@ std::string stem(const std::string& path) {
   std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
   const size_t dot = base.find_last_of('.');
   return dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
+}
+
+// Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
+// coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
+// q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
+// circumference). Bounded (scene/scene_bounds.h) so that these products stay finite.
+Drag read_drag(const Value& v, double radius) {
+  Map m(v);
+  Drag d;
+  if (auto p = m.find("linear_normal")) d.linear_normal = p->in_range("linear_normal");
+  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->in_range("linear_tangential");
+  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->in_range("quadratic_normal");
+  if (auto p = m.find("quadratic_tangential"))
+    d.quadratic_tangential = p->in_range("quadratic_tangential");
+  if (auto rho = m.find("fluid_density")) {
+    if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
+      rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
+    const double density = rho->in_range("fluid_density");
+    double cd = 1.2, cf = 0.0;
+    if (auto p = m.find("drag_coefficient")) cd = p->in_range("drag_coefficient");
+    if (auto p = m.find("friction_coefficient")) cf = p->in_range("friction_coefficient");
+    d.quadratic_normal = density * cd * radius;
+    d.quadratic_tangential = density * cf * M_PI * radius;
+  } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
+    m.fail("drag_coefficient and friction_coefficient need fluid_density");
+  }
+  m.finish();
+  return d;
+}
+
+// A rod's own keys (RodDescription), after the rods `before` it.
+RodDescription describe_rod(const Value& v, int index, const std::vector<RodDescription>& before,
+                            const std::optional<Value>& default_state) {
+  RodDescription r;
+  r.path = v.path();
+  r.map.emplace(v);
+  Map& m = *r.map;
+  RodSpec& spec = r.spec;
+  spec.name = "rod" + std::to_string(index);
+  if (auto p = m.find("name")) {
+    spec.name = p->string();
+    if (spec.name.empty()) p->fail("must not be empty");
+    for (const RodDescription& b : before)
+      if (b.spec.name == spec.name)
+        p->fail("duplicate rod name " + echo(spec.name) + " (also " + b.path + ")");
+  }
+  std::optional<Value> elements = m.find("elements");
+  if (elements) spec.elements = elements->integer(1, SceneLimits::max_elements);
+  long total = spec.elements;
+  for (const RodDescription& b : before) total += b.spec.elements;
+  if (total > SceneLimits::max_total_elements)
+    (elements ? *elements : v)
+        .fail("the scene's rods would have " + std::to_string(total) +
+              " elements together, more than the limit of " +
+              std::to_string(SceneLimits::max_total_elements));
+  spec.section = read_section(&m);
+  spec.shape = read_shape(m.get("shape"));
+  if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
+  if (auto p = m.find("rest_shape"))
+    spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
+  if (auto p = m.find("drag")) r.drag = read_drag(*p, spec.section.radius);
+  if (auto p = m.find("contact")) {
+    r.contact.emplace();
+    read_rod_contact(*p, &*r.contact);
+  }
+  std::optional<Value> state = m.find("initial_state");
+  if (!state) state = default_state;
+  if (state && wants_equilibrium(*state)) {
+    if (m.has("initial"))
+      state->fail("equilibrium starts " + v.path() +
+                  " at rest in its equilibrium shape; remove its `initial` key (velocities, "
+                  "perturbation) or set initial_state: given on the rod");
+    r.equilibrium = state;
+  }
+  return r;
 }
 
 }  // namespace
@@ -58,15 +135,17 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
     if (*d.time_step > d.duration) step->fail("longer than the duration " + num(d.duration) + " s");
   }
   const Value rods = top.get("rods");
-  d.rods = limited_items(rods, SceneLimits::max_rods, "rods");
-  if (d.rods.empty()) rods.fail("needs at least one rod");
+  const std::vector<Value> items = limited_items(rods, SceneLimits::max_rods, "rods");
+  if (items.empty()) rods.fail("needs at least one rod");
   // Relative paths in the scene (keyframe files) are relative to the scene file's folder.
   const size_t slash = source.find_last_of('/');
   d.base = source == "<string>" || slash == std::string::npos
                ? std::string()
                : (slash == 0 ? std::string("/") : source.substr(0, slash));
-  d.default_state = top.find("initial_state");
-  if (d.default_state) wants_equilibrium(*d.default_state);  // checks the value
+  const std::optional<Value> default_state = top.find("initial_state");
+  if (default_state) wants_equilibrium(*default_state);  // checks the value
+  for (size_t i = 0; i < items.size(); ++i)
+    d.rods.push_back(describe_rod(items[i], static_cast<int>(i), d.rods, default_state));
   d.contact = top.find("contact");
   d.obstacles = top.find("obstacles");
   d.grasps = top.find("grasps");

@@ -234,34 +234,6 @@ void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings)
   rod->add_load(l);
 }
 
-// Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
-// coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
-// q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
-// circumference). Bounded (scene/scene_bounds.h) so that these products stay finite.
-Drag read_drag(const Value& v, double radius) {
-  Map m(v);
-  Drag d;
-  if (auto p = m.find("linear_normal")) d.linear_normal = p->in_range("linear_normal");
-  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->in_range("linear_tangential");
-  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->in_range("quadratic_normal");
-  if (auto p = m.find("quadratic_tangential"))
-    d.quadratic_tangential = p->in_range("quadratic_tangential");
-  if (auto rho = m.find("fluid_density")) {
-    if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
-      rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
-    const double density = rho->in_range("fluid_density");
-    double cd = 1.2, cf = 0.0;
-    if (auto p = m.find("drag_coefficient")) cd = p->in_range("drag_coefficient");
-    if (auto p = m.find("friction_coefficient")) cf = p->in_range("friction_coefficient");
-    d.quadratic_normal = density * cd * radius;
-    d.quadratic_tangential = density * cf * M_PI * radius;
-  } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
-    m.fail("drag_coefficient and friction_coefficient need fluid_density");
-  }
-  m.finish();
-  return d;
-}
-
 // `rotational_inertia_scale`: a number >= 1, or auto (stability/explicit_step_limit.h,
 // lifting_inertia_scale).
 void read_inertia_scale(const Value& v, Rod* rod, std::vector<std::string>* notes) {
@@ -293,37 +265,16 @@ struct RodEntry {
   std::optional<Value> equilibrium;
 };
 
-void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* entries,
-              const std::string& base, const std::optional<Value>& default_state) {
-  Map m(v);
-  RodSpec spec;
-  spec.name = "rod" + std::to_string(index);
-  if (auto p = m.find("name")) {
-    spec.name = p->string();
-    if (spec.name.empty()) p->fail("must not be empty");
-    for (size_t i = 0; i < entries->size(); ++i)
-      if (scene->world.rods()[i].name() == spec.name)
-        p->fail("duplicate rod name " + echo(spec.name) + " (also " + (*entries)[i].path + ")");
-  }
-  std::optional<Value> elements = m.find("elements");
-  if (elements) spec.elements = elements->integer(1, SceneLimits::max_elements);
-  long total = spec.elements;
-  for (const Rod& r : scene->world.rods()) total += r.num_segments();
-  if (total > SceneLimits::max_total_elements)
-    (elements ? *elements : v)
-        .fail("the scene's rods would have " + std::to_string(total) +
-              " elements together, more than the limit of " +
-              std::to_string(SceneLimits::max_total_elements));
-  spec.section = scene_detail::read_section(&m);
-  spec.shape = scene_detail::read_shape(m.get("shape"));
-  if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
-  if (auto p = m.find("rest_shape"))
-    spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
+// Builds a rod from its description, then reads what needs the built rod: its initial
+// velocities, boundary, loads and rotational_inertia_scale.
+void build_rod_entry(RodDescription* r, Scene* scene, std::vector<RodEntry>* entries,
+                     const std::string& base) {
+  Map& m = *r->map;
   Rod* rod = nullptr;
   try {
-    rod = &scene->world.add_rod(build_rod(spec));
+    rod = &scene->world.add_rod(build_rod(r->spec));
   } catch (const std::invalid_argument& e) {
-    throw SceneError(v.path() + ".shape: " + e.what());
+    throw SceneError(r->path + ".shape: " + e.what());
   }
   {
     double length = 0.0;
@@ -333,19 +284,10 @@ void read_rod(const Value& v, int index, Scene* scene, std::vector<RodEntry>* en
                           num(SceneBounds::min_length) + " .. " + num(SceneBounds::max_length) +
                           " m");
   }
-  if (auto d = m.find("drag")) rod->set_drag(read_drag(*d, spec.section.radius));
-  if (auto c = m.find("contact")) scene_detail::read_rod_contact(*c, &rod->contact_options());
-  std::optional<Value> state = m.find("initial_state");
-  if (!state) state = default_state;
-  const bool settle = state && wants_equilibrium(*state);
-  if (auto i = m.find("initial")) {
-    if (settle)
-      state->fail("equilibrium starts " + v.path() +
-                  " at rest in its equilibrium shape; remove its `initial` key (velocities, "
-                  "perturbation) or set initial_state: given on the rod");
-    scene_detail::read_initial(*i, rod);
-  }
-  RodEntry entry{v.path(), {}, settle ? state : std::nullopt};
+  if (r->drag) rod->set_drag(*r->drag);
+  if (r->contact) rod->contact_options() = *r->contact;
+  if (auto i = m.find("initial")) read_initial(*i, rod);
+  RodEntry entry{r->path, {}, r->equilibrium};
   if (auto b = m.find("boundary"))
     for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries")) {
       Support support;
@@ -466,8 +408,7 @@ Scene build_scene(SceneDescription* d, AutomaticRequests* requests) {
   scene.warnings = d->warnings;
 
   std::vector<RodEntry> entries;
-  for (size_t i = 0; i < d->rods.size(); ++i)
-    read_rod(d->rods[i], static_cast<int>(i), &scene, &entries, d->base, d->default_state);
+  for (RodDescription& r : d->rods) build_rod_entry(&r, &scene, &entries, d->base);
   if (d->contact) read_contact_settings(*d->contact, &scene.world.contact);
   if (d->obstacles) {
     std::vector<std::string> obstacle_paths, rod_paths;

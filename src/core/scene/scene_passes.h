@@ -1,16 +1,19 @@
 // Internal to the scene loader: the three passes of parse_scene() (docs/architecture.md, "Scene
 // loading").
 //   (a) describe_scene: the YAML tree (overrides applied) into a SceneDescription: the top-level
-//       settings and what the scene asks of the automatic pass, read and validated; nothing built.
-//   (b) build_scene: the rods, contact settings, obstacles and grasps from the description into a
-//       World. Each entry is read as it is built, against the rods built before it: node and
-//       segment indices, `end`, keyframes given as absolute poses and arc lengths need the rod.
+//       settings, each rod's own keys (name, elements, material, shape, drag, contact, initial
+//       state) and what the scene asks of the automatic pass, read and validated; nothing built.
+//   (b) build_scene: the rods built from their descriptions, then the entries that need a built
+//       rod, read in file order against the rods built before them (node and segment indices,
+//       `end`, keyframes given as absolute poses and arc lengths): each rod's initial velocities,
+//       boundary, loads and rotational_inertia_scale, then contact settings, obstacles, grasps.
 //   (c) make_automatic_choices: on the built scene, initial_state: equilibrium, then time_step:
 //       auto and integrator: auto, each logged with its reason in Scene::notes or settled. It
 //       counts work, never time, so the result depends on the scene only. (elements: auto runs
 //       before (b): it rewrites the tree after probe runs of (b) and (c) at two resolutions,
 //       scene_elements.h.)
-// The passes keep the order in which keys are checked, so a bad file gives the same error.
+// A file with one error gives the same error as when the loader read and built in one go; of
+// several errors in different rods, the first in pass (a) is reported.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -37,6 +40,19 @@ struct AutomaticRequests {
   bool integrator_auto = false;
 };
 
+// A rod's own keys, read in pass (a).
+struct RodDescription {
+  std::string path;  // "rods[0]"
+  RodSpec spec;      // name, elements, section (material, radius), shape, reference_d1, rest_shape
+  std::optional<Drag> drag;
+  std::optional<ContactOptions> contact;
+  std::optional<Value> equilibrium;  // the initial_state key that asks for it (the rod's or the
+                                     // scene's)
+  // Its map: pass (b) reads initial, boundary, loads and rotational_inertia_scale from it, then
+  // refuses unknown keys.
+  std::optional<Map> map;
+};
+
 // Pass (a)'s result.
 struct SceneDescription {
   std::string source;  // names the text in messages
@@ -51,10 +67,9 @@ struct SceneDescription {
   std::optional<double> time_step;  // s; none: time_step: auto
   std::optional<Value> time_step_key;
   std::vector<std::string> warnings;
-  // The entries pass (b) reads: rods (at least one, within SceneLimits::max_rods), the scene's
-  // default initial_state (its value checked), contact, obstacles, grasps.
-  std::vector<Value> rods;
-  std::optional<Value> default_state, contact, obstacles, grasps;
+  std::vector<RodDescription> rods;  // at least one, at most SceneLimits::max_rods
+  // The entries pass (b) reads: contact settings, obstacles, grasps.
+  std::optional<Value> contact, obstacles, grasps;
   // The top-level map, whose unknown keys pass (b) refuses once every entry is read.
   std::optional<Map> top;
 };
