@@ -64,6 +64,13 @@ if(CATKIN_ENABLE_TESTING)
       add_dependencies(${_exe} corde_run)
       target_compile_definitions(${_exe} PRIVATE CORDE_RUN_BINARY="$<TARGET_FILE:corde_run>")
     endif()
+    if(kind STREQUAL "unit" AND TARGET corde_ros)
+      # The adapter's ROS-free logic (~configure's checks against the key ranges) is tested here
+      # too, when the adapter is built.
+      corde_ros_target(${_exe})
+      target_link_libraries(${_exe} PRIVATE corde_ros)
+      target_compile_definitions(${_exe} PRIVATE CORDE_TEST_ROS_ADAPTER=1)
+    endif()
     set_target_properties(${_exe} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR})
     # Run from the source root (config/ paths work). Suites whose tests share one expensive run
     # (a function-local static) run as one ctest test, so that the run is computed once.

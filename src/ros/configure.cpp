@@ -2,45 +2,37 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
 #include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/rod/rod_edit.h"
 #include "corde_sim/ros/input_checks.h"
+#include "corde_sim/scene/key_ranges.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde_sim {
 namespace {
 
-// Accepted range per key: [lo, hi], with lo itself allowed only where zero is meaningful.
-struct KeyRange {
-  const char* key;
-  double lo, hi;
-  bool lo_inclusive;
-  const char* unit;
+// The rod keys take their ranges from the library's table (scene/key_ranges.h), as the scene
+// reader does; the world keys are the node's own.
+const char* const kRodKeys[] = {"E",       "G",       "E_s",    "rho",      "kappa",
+                                "gamma_t", "gamma_r", "radius", "elements", "damping_time"};
+
+const corde::KeyRange kWorldRanges[] = {
+    // Below 1e-9 s the clock would hardly advance.
+    {"time_step", 1e-9, 0.01, true, "s", "the world's time step"},
+    {"gravity_x", -1000.0, 1000.0, true, "m/s^2", "gravity, x"},
+    {"gravity_y", -1000.0, 1000.0, true, "m/s^2", "gravity, y"},
+    {"gravity_z", -1000.0, 1000.0, true, "m/s^2", "gravity, z"},
 };
 
-const KeyRange kRanges[] = {
-    {"E", 0.0, 1e13, false, "Pa"},
-    {"G", 0.0, 1e13, false, "Pa"},
-    {"E_s", 0.0, 1e13, false, "Pa"},
-    {"rho", 0.0, 1e5, false, "kg/m^3"},
-    {"kappa", 0.0, 1e13, true, "N"},
-    {"gamma_t", 0.0, 1e9, true, "N s"},
-    {"gamma_r", 0.0, 1e9, true, "N m^2 s"},
-    {"radius", 0.0, 1.0, false, "m"},
-    {"elements", 1.0, 100000.0, true, ""},
-    {"time_step", 1e-9, 0.01, true, "s"},  // below 1e-9 s the clock would hardly advance
-    {"gravity_x", -1000.0, 1000.0, true, "m/s^2"},
-    {"gravity_y", -1000.0, 1000.0, true, "m/s^2"},
-    {"gravity_z", -1000.0, 1000.0, true, "m/s^2"},
-    {"damping_time", 0.0, 100.0, true, "s"},
-};
-
-const KeyRange* find_range(const std::string& key) {
-  for (const KeyRange& r : kRanges)
-    if (key == r.key) return &r;
+const corde::KeyRange* find_range(const std::string& key) {
+  for (const char* k : kRodKeys)
+    if (key == k) return corde::find_key_range(key);
+  for (const corde::KeyRange& r : kWorldRanges)
+    if (key == r.name) return &r;
   return nullptr;
 }
 
@@ -58,8 +50,8 @@ bool is_world_key(const std::string& k) {
 
 const std::vector<std::string>& configure_keys() {
   static const std::vector<std::string> keys = [] {
-    std::vector<std::string> k;
-    for (const KeyRange& r : kRanges) k.push_back(r.key);
+    std::vector<std::string> k(std::begin(kRodKeys), std::end(kRodKeys));
+    for (const corde::KeyRange& r : kWorldRanges) k.push_back(r.name);
     return k;
   }();
   return keys;
@@ -74,7 +66,7 @@ std::string integrator_names() { return corde::integrator_names_joined(); }
 
 double explicit_margin(const corde::World& world, std::string* limiting_rod) {
   limiting_rod->clear();
-  if (corde::is_implicit(world.integrator)) return 0.0;
+  if (!corde::has_explicit_step_limit(world.integrator)) return 0.0;
   const corde::WorldStepLimit limit = corde::explicit_step_limit(world, false);
   if (limit.rod < 0) return 0.0;
   *limiting_rod = world.rods()[limit.rod].name();
@@ -136,17 +128,11 @@ std::string plan_configure(const corde::World& world, const std::string& rod,
   for (size_t i = 0; i < keys.size(); ++i) {
     const std::string& k = keys[i];
     const double v = values[i];
-    const KeyRange* range = find_range(k);
+    const corde::KeyRange* range = find_range(k);
     if (!range) return "unknown key '" + clip(k) + "' (keys: " + join(configure_keys()) + ")";
     if (plan->values.count(k)) return "key '" + k + "' given twice";
-    if (!std::isfinite(v)) return k + " must be finite, got " + num(v);
-    const bool low_ok = range->lo_inclusive ? v >= range->lo : v > range->lo;
-    if (!low_ok || v > range->hi) {
-      std::ostringstream os;
-      os << k << " must be in " << (range->lo_inclusive ? "[" : "(") << range->lo << ", "
-         << range->hi << "] " << range->unit << ", got " << v;
-      return os.str();
-    }
+    const std::string why = corde::range_violation(*range, v);
+    if (!why.empty()) return k + ": " + why;
     if (k == "elements" && v != std::round(v)) return "elements must be an integer, got " + num(v);
     plan->values[k] = v;
   }

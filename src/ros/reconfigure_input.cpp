@@ -7,14 +7,18 @@
 #include <vector>
 
 #include "corde_sim/ros/input_checks.h"
+#include "corde_sim/scene/key_ranges.h"
 
 namespace corde_sim {
 namespace {
 
-// dynamic_reconfigure clamps values to the ranges of cfg/Node.cfg, but a NaN passes its clamp:
-// a value that is not finite or outside [lo, hi] is put back to `previous` (the server's reply
-// then shows the kept value) and the warning returned ("" when the value is used).
-std::string keep_if_bad(const char* name, double* value, double previous, double lo, double hi) {
+// dynamic_reconfigure clamps values to the ranges of cfg/Node.cfg (equal to the library's table,
+// scene/key_ranges.h), but a NaN passes its clamp: a value that is not finite or outside the
+// table's [lo, hi] is put back to `previous` (the server's reply then shows the kept value) and
+// the warning returned ("" when the value is used).
+std::string keep_if_bad(const char* name, double* value, double previous) {
+  const corde::KeyRange& range = *corde::find_key_range(name);
+  const double lo = range.min, hi = range.max;
   if (std::isfinite(*value) && *value >= lo && *value <= hi) return "";
   const std::string w = std::string(name) + " " + num(*value) + " refused (must be finite, in [" +
                         num(lo) + ", " + num(hi) + "]); kept " + num(previous);
@@ -45,23 +49,17 @@ ReconfigureInput::~ReconfigureInput() {
 }
 
 void ReconfigureInput::on_request(NodeConfig& c) {
-  const NodeConfig& lo = NodeConfig::__getMin__();
-  const NodeConfig& hi = NodeConfig::__getMax__();
   std::unique_lock<std::mutex> lock(mutex_);
   const NodeConfig& last = accepted_;
   std::vector<std::string> refused = {
-      keep_if_bad("real_time_factor", &c.real_time_factor, last.real_time_factor,
-                  lo.real_time_factor, hi.real_time_factor),
-      keep_if_bad("tf_rate", &c.tf_rate, last.tf_rate, lo.tf_rate, hi.tf_rate),
-      keep_if_bad("marker_rate", &c.marker_rate, last.marker_rate, lo.marker_rate, hi.marker_rate),
-      keep_if_bad("state_rate", &c.state_rate, last.state_rate, lo.state_rate, hi.state_rate),
-      keep_if_bad("marker_min_diameter", &c.marker_min_diameter, last.marker_min_diameter,
-                  lo.marker_min_diameter, hi.marker_min_diameter),
-      keep_if_bad("holder_max_speed", &c.holder_max_speed, last.holder_max_speed,
-                  lo.holder_max_speed, hi.holder_max_speed),
+      keep_if_bad("real_time_factor", &c.real_time_factor, last.real_time_factor),
+      keep_if_bad("tf_rate", &c.tf_rate, last.tf_rate),
+      keep_if_bad("marker_rate", &c.marker_rate, last.marker_rate),
+      keep_if_bad("state_rate", &c.state_rate, last.state_rate),
+      keep_if_bad("marker_min_diameter", &c.marker_min_diameter, last.marker_min_diameter),
+      keep_if_bad("holder_max_speed", &c.holder_max_speed, last.holder_max_speed),
       keep_if_bad("holder_max_acceleration", &c.holder_max_acceleration,
-                  last.holder_max_acceleration, lo.holder_max_acceleration,
-                  hi.holder_max_acceleration)};
+                  last.holder_max_acceleration)};
   if (c.marker_style != "cylinders" && c.marker_style != "line_strip") {
     refused.push_back("marker_style '" + clip(c.marker_style) +
                       "' refused (cylinders or line_strip); kept " + last.marker_style);

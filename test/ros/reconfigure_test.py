@@ -46,6 +46,12 @@ class Reconfigure(unittest.TestCase):
         self.client.update_configuration({"marker_style": "line_strip"})
         time.sleep(0.3)
         self.assertEqual(types(), {Marker.LINE_STRIP})
+        # An unknown style (`dynparam set /sim marker_style bogus`) is refused: kept, and the
+        # reply shows the kept one (issue 24, item 11).
+        c = self.client.update_configuration({"marker_style": "bogus"})
+        self.assertEqual(c["marker_style"], "line_strip")
+        time.sleep(0.3)
+        self.assertEqual(types(), {Marker.LINE_STRIP})
         self.client.update_configuration({"marker_style": "cylinders"})
 
     def test_3_holder_speed(self):

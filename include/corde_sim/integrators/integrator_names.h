@@ -22,6 +22,11 @@ inline std::vector<std::string> integrator_name_list() {
   return out;
 }
 
+// Whether the explicit step limit (stability/explicit_step_limit.h) applies to the integrator:
+// the explicit methods blow up above it, the implicit ones are stable at any step. The one
+// answer to that question for the scene's step checks, ~configure, the guard and the node.
+constexpr bool has_explicit_step_limit(Integrator i) { return !is_implicit(i); }
+
 // "semi_implicit_euler, split_rotation, implicit_euler, bdf2" (for messages).
 inline std::string integrator_names_joined() {
   std::string out;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/scene/scene_runner.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 #include "scene_reader.h"
@@ -113,8 +114,6 @@ struct Probe {
   RunResult result;
 };
 
-bool is_explicit(Integrator i) { return !is_implicit(i); }
-
 Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
                 const SceneBuilder& build, const Scene* like) {
   YAML::Node tree = YAML::Clone(root);
@@ -126,8 +125,8 @@ Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
   Probe p{build(tree), {}, {}};
   // A given step the explicit method cannot take at the finer probe's resolution: its stable one.
   const double limit = explicit_step_limit(p.scene.world, false).time_step;
-  if (!like && is_explicit(p.scene.world.integrator) && p.scene.world.time_step > limit &&
-      limit > 0.0) {
+  if (!like && has_explicit_step_limit(p.scene.world.integrator) &&
+      p.scene.world.time_step > limit && limit > 0.0) {
     tree["time_step"] = 0.8 * limit;
     p.scene = build(tree);
   }

@@ -23,16 +23,10 @@ const MaterialPreset& find_preset(const Value& v) {
   }
 }
 
-// Keys of the material map, at most `hi` (scene/scene_bounds.h) in `unit`.
-std::optional<double> positive_key(Map* m, const char* key, double hi, const char* unit) {
+// A key of the material map, within its range (scene/key_ranges.h).
+std::optional<double> ranged_key(Map* m, const char* key) {
   if (!m) return std::nullopt;
-  if (std::optional<Value> v = m->find(key)) return v->positive(hi, unit);
-  return std::nullopt;
-}
-
-std::optional<double> non_negative_key(Map* m, const char* key, double hi, const char* unit) {
-  if (!m) return std::nullopt;
-  if (std::optional<Value> v = m->find(key)) return v->non_negative(hi, unit);
+  if (std::optional<Value> v = m->find(key)) return v->in_range(key);
   return std::nullopt;
 }
 
@@ -58,9 +52,7 @@ Section read_section(Map* rod) {
   }
   double radius = 0.0;
   if (std::optional<Value> r = rod->find("radius")) {
-    radius = r->positive(SceneBounds::max_length, "m");
-    if (radius < SceneBounds::min_length)
-      r->fail("must be >= " + num(SceneBounds::min_length) + " m, got " + num(radius));
+    radius = r->in_range("radius");
   } else if (preset) {
     radius = preset->radius;
   } else {
@@ -87,32 +79,25 @@ Section read_section(Map* rod) {
   if (m && ((m->has("G") ? 1 : 0) + (m->has("nu") ? 1 : 0) + (m->has("C") ? 1 : 0)) > 1)
     m->fail("give only one of G, nu and C");
 
-  constexpr double kModulus = SceneBounds::max_modulus, kCoef = SceneBounds::max_coefficient;
-  if (auto v = positive_key(m, "E", kModulus, "Pa")) E = v;
-  if (auto v = positive_key(m, "G", kModulus, "Pa")) G = v;
-  if (auto v = positive_key(m, "E_s", kModulus, "Pa")) Es = v;
-  if (auto v = positive_key(m, "rho", SceneBounds::max_density, "kg/m^3")) {
-    rho = v;
-    if (*v < SceneBounds::min_density)  // a near-massless rod starts at an enormous energy per mass
-      m->get("rho").fail("must be >= " + num(SceneBounds::min_density) + " kg/m^3, got " + num(*v));
-  }
+  if (auto v = ranged_key(m, "E")) E = v;
+  if (auto v = ranged_key(m, "G")) G = v;
+  if (auto v = ranged_key(m, "E_s")) Es = v;
+  // Bounded below too: a near-massless rod starts at an enormous energy per mass.
+  if (auto v = ranged_key(m, "rho")) rho = v;
   if (m) {
     if (std::optional<Value> nv = m->find("nu")) {
-      const double nu = nv->number();
-      if (!(nu > -1.0 && nu <= 0.5)) nv->fail("must be in (-1, 0.5], got " + num(nu));
+      const double nu = nv->in_range("nu");
       if (!E) nv->fail("needs E to derive G = E / (2 (1 + nu))");
       G = *E / (2.0 * (1.0 + nu));
     }
   }
-  const std::optional<double> B = positive_key(m, "B", kCoef, "N m^2"),
-                              C = positive_key(m, "C", kCoef, "N m^2"),
-                              Ks = positive_key(m, "K_s", kCoef, "N");
-  const std::optional<double> kappa = positive_key(m, "kappa", kCoef, "N");
-  const std::optional<double> gamma_t = non_negative_key(m, "gamma_t", kCoef, "N s");
-  const std::optional<double> gamma_r = non_negative_key(m, "gamma_r", kCoef, "N m^2 s");
-  const std::optional<double> tau = non_negative_key(m, "damping_time", SceneBounds::max_time, "s");
-  const std::optional<double> max_strain =
-      non_negative_key(m, "max_strain", SceneBounds::max_factor, "");
+  const std::optional<double> B = ranged_key(m, "B"), C = ranged_key(m, "C"),
+                              Ks = ranged_key(m, "K_s");
+  const std::optional<double> kappa = ranged_key(m, "kappa");
+  const std::optional<double> gamma_t = ranged_key(m, "gamma_t");
+  const std::optional<double> gamma_r = ranged_key(m, "gamma_r");
+  const std::optional<double> tau = ranged_key(m, "damping_time");
+  const std::optional<double> max_strain = ranged_key(m, "max_strain");
   if (m) m->finish();
 
   const double area = kPi * radius * radius;

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 namespace corde {
 namespace scene_detail {
@@ -87,6 +88,19 @@ double Value::non_negative(double hi, const char* unit) const {
   const double v = non_negative();
   if (v > hi) fail("must be <= " + with_unit(hi, unit) + ", got " + num(v));
   return v;
+}
+
+double Value::in_range(const KeyRange& range) const {
+  const double v = number();
+  const std::string why = range_violation(range, v);
+  if (!why.empty()) fail(why);
+  return v;
+}
+
+double Value::in_range(const char* key) const {
+  const KeyRange* range = find_key_range(key);
+  if (!range) throw std::logic_error(std::string("no key range named ") + key);
+  return in_range(*range);
 }
 
 int Value::integer(int lo, int hi) const {

@@ -15,6 +15,7 @@
 #include "corde_sim/rod/motion.h"
 #include "corde_sim/rod/rod.h"
 #include "corde_sim/rod/rod_shape.h"
+#include "corde_sim/scene/key_ranges.h"
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/scene/scene_bounds.h"
 #include "corde_sim/world/world.h"
@@ -51,7 +52,10 @@ class Value {
   double within(double lo, double hi, const char* unit) const;
   double positive(double hi, const char* unit) const;      // in (0, hi]
   double non_negative(double hi, const char* unit) const;  // in [0, hi]
-  int integer(int lo, int hi) const;  // fails naming the range when outside [lo, hi]
+  // A number within a key's range (scene/key_ranges.h): fails with range_violation()'s text.
+  double in_range(const KeyRange& range) const;
+  double in_range(const char* key) const;  // the table's entry named `key`
+  int integer(int lo, int hi) const;       // fails naming the range when outside [lo, hi]
   bool boolean() const;
   std::string string() const;
   Vec3 vec3() const;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "corde_sim/grasp/grasp.h"
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
@@ -226,13 +227,13 @@ std::string run_summary(const Scene& scene, const RunResult& r) {
   char buf[512];
   std::string out = scene_header(scene);
   for (const std::string& note : scene.notes) out += "chosen     " + note + "\n";
-  const bool implicit = is_implicit(scene.world.integrator);
+  const bool limited = has_explicit_step_limit(scene.world.integrator);
   for (const Rod& rod : scene.world.rods()) {
     const StabilityEstimate e = estimate_stability(rod);
     std::snprintf(buf, sizeof buf,
                   "stability  %s: step limit %.3g s (%s), time step %.2f of it%s\n",
                   rod.name().c_str(), e.time_step, e.limiting.c_str(),
-                  scene.world.time_step / e.time_step, implicit ? " (explicit methods only)" : "");
+                  scene.world.time_step / e.time_step, limited ? "" : " (explicit methods only)");
     out += buf;
   }
   std::snprintf(buf, sizeof buf, "steps      %ld of %.3g s (%s), %.6g s simulated\n", r.steps,

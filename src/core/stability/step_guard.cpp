@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/model/element_energies.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
@@ -279,7 +280,7 @@ bool StepGuard::reduce(const World& world, const GuardProblem& p, double t_fail)
   e.rollback_to = world.time();
   const bool threw = p.detail.rfind("the step threw", 0) == 0;
   // bdf2 is implicit too: it halves its step, and the fallback stays implicit_euler.
-  const bool explicit_method = !is_implicit(integrator_);
+  const bool explicit_method = has_explicit_step_limit(integrator_);
   const bool allow_implicit = settings_.allow_implicit;
   if (trial_) {
     // The user's setting failed again: back to the one that worked, and wait longer next time.
