@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "corde_sim/WorldState.h"
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/ros/sim_node.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
@@ -45,7 +46,7 @@ void NodeOutputs::update_diagnostics(double now) {
 
 std::string NodeOutputs::margin_text() const {
   // The explicit limit means nothing to the implicit method: saying 0 would read as a margin.
-  if (corde::is_implicit(node_.world_.integrator)) return "no explicit step limit";
+  if (!corde::has_explicit_step_limit(node_.world_.integrator)) return "no explicit step limit";
   char buf[64];
   std::snprintf(buf, sizeof buf, "h/h_crit %.3g", node_.stats_.stability_margin);
   return buf;

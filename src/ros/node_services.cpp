@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/io/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
@@ -335,7 +336,7 @@ void NodeServices::configure(Configure::Request& req, Configure::Response& res) 
     res.message = "configured " +
                   (req.rod.empty() ? std::string("all rods") : "rod '" + clip(req.rod) + "'") +
                   ": " + summary + "(" + corde::integrator_name(node_.world_.integrator) +
-                  (corde::is_implicit(node_.world_.integrator)
+                  (!corde::has_explicit_step_limit(node_.world_.integrator)
                        ? std::string(", no explicit step limit")
                        : ", h/h_crit " + num(node_.stats_.stability_margin)) +
                   ")" + note;
