@@ -10,6 +10,7 @@
 #include "corde_sim/grasp/grasp.h"
 #include "corde_sim/grasp/reactions.h"
 #include "corde_sim/scene/scene_runner.h"
+#include "corde_sim/statics/static_hessian.h"
 
 namespace corde {
 namespace {

@@ -11,6 +11,7 @@
 #include "corde_sim/linalg/newton.h"
 #include "corde_sim/math/so3.h"
 #include "corde_sim/model/rod_system.h"
+#include "corde_sim/statics/static_hessian.h"
 
 namespace corde {
 namespace {
