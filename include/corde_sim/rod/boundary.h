@@ -1,4 +1,5 @@
-// Boundary conditions and loads on nodes and segments of a rod.
+// Boundary conditions on nodes and segments of a rod (drives, constraints, ghost-frame clamps) and
+// the one evaluation of a drive's state. Loads and drag are in model/loads.h and model/drag.h.
 #pragma once
 
 #include <memory>
