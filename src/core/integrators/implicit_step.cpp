@@ -591,8 +591,11 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   for (const NodeDrive& d : rod.node_drives())
     if (d.kind != NodeDrive::Kind::kTarget) v[d.node] = drive_state(d, t1, h, x[d.node]).velocity;
   for (const SegmentDrive& d : rod.segment_drives())
-    if (d.kind != SegmentDrive::Kind::kTarget)
-      w[d.segment] = drive_state(d, t1, h, q[d.segment]).angular_velocity;
+    if (d.kind != SegmentDrive::Kind::kTarget) {
+      Vec3 ww;  // in the body frame the step left the segment in
+      drive_orientation(d, t1, &ww);
+      w[d.segment] = q[d.segment].conjugate() * ww;
+    }
   x_free_ = x;
   q_free_ = q;
   v_free_ = v;
