@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "corde_sim/statics/static_hessian.h"
 #include "corde_sim/statics/statics.h"
 #include "validation_util.h"
 

@@ -1,9 +1,12 @@
-// Boundary conditions and loads on nodes and segments of a rod.
+// Boundary conditions on nodes and segments of a rod (drives, constraints, ghost-frame clamps) and
+// the one evaluation of a drive's state. Loads and drag are in model/loads.h and model/drag.h.
 #pragma once
 
 #include <memory>
 
+#include "corde_sim/model/drag.h"
 #include "corde_sim/model/element_energies.h"
+#include "corde_sim/model/loads.h"
 #include "corde_sim/rod/motion.h"
 
 namespace corde {
@@ -61,26 +64,6 @@ struct SegmentConstraint {
   Vec3 reaction = Vec3::Zero();    // output: the constraint torque of the last step (world, N m)
 };
 
-// A force on a node or a torque on a segment, ramped linearly from zero to `value` over
-// [t_start, t_start + ramp_time] and constant after (ramp_time 0: a step). A dead load keeps its
-// direction in the world frame; a follower load is given in the body frame of a segment and turns
-// with it (a torque: its own segment; a force on node i: segment min(i, N - 1)).
-struct Load {
-  enum class Kind { kForce, kTorque };
-  Kind kind = Kind::kForce;
-  int index = 0;
-  Vec3 value = Vec3::Zero();
-  double t_start = 0.0;
-  double ramp_time = 0.0;
-  bool follower = false;
-
-  double scale(double t) const {
-    if (t < t_start) return 0.0;
-    if (ramp_time <= 0.0 || t >= t_start + ramp_time) return 1.0;
-    return (t - t_start) / ramp_time;
-  }
-};
-
 // A fixed frame beyond an end of the rod, joined to the end segment by a bending element of half
 // a segment's rest length. With the end node fixed and the end segment free to rotate this is a
 // clamp whose bending acts at the node, which removes most of the O(1/N) bias of freezing the
@@ -96,31 +79,35 @@ struct GhostFrame {
   Vec3 reaction = Vec3::Zero();
 };
 
-// Drag of the surrounding air (or fluid) at rest, per unit length of rod, split into the
-// components of the velocity normal and tangential to the rod: f = -(c_n v_n + c_t v_t) -
-// (q_n |v_n| v_n + q_t |v_t| v_t) (N/m). From a fluid of density rho_f and a normal drag
-// coefficient C_d on a cylinder of diameter 2r: q_n = rho_f C_d r (= 1/2 rho_f C_d 2r).
-struct Drag {
-  double linear_normal = 0.0;         // c_n (N s/m^2)
-  double linear_tangential = 0.0;     // c_t (N s/m^2)
-  double quadratic_normal = 0.0;      // q_n (N s^2/m^3)
-  double quadratic_tangential = 0.0;  // q_t (N s^2/m^3)
-  bool active() const {
-    return linear_normal > 0.0 || linear_tangential > 0.0 || quadratic_normal > 0.0 ||
-           quadratic_tangential > 0.0;
-  }
-};
-
-}  // namespace corde
-
-namespace corde {
-
 // Where a drive puts its node or segment at time t (kTarget: at its target), and with which
 // velocity (world frame; kTarget: zero, its velocity comes from the step). The one evaluation of
-// drives that the step and statics share.
+// drives that the steps and statics share.
 Vec3 drive_position(const NodeDrive& d, double t, Vec3* velocity = nullptr);
 Quat drive_orientation(const SegmentDrive& d, double t, Vec3* angular_velocity = nullptr);
+// drive_orientation() with the sign of `near` (q and -q are one rotation): a driven segment's
+// orientation as the steps and statics set it, so that its turn from `near` is the short one.
+Quat drive_orientation_near(const SegmentDrive& d, double t, const Quat& near,
+                            Vec3* angular_velocity = nullptr);
 // A ghost frame's orientation at time t (its motion applied to its origin, or fixed).
 Quat ghost_frame_at(const GhostFrame& g, double t);
+
+// A driven node at the end of a step of length h ending at t_end, from position x at its start:
+// the drive's position and velocity, or for kTarget its target and the velocity that reaches it
+// over the step.
+struct DrivenNode {
+  Vec3 position;
+  Vec3 velocity;  // world frame
+};
+DrivenNode drive_state(const NodeDrive& d, double t_end, double h, const Vec3& x);
+
+// A driven segment at the end of a step of length h ending at t_end, from orientation q at its
+// start: the drive's orientation and angular velocity, or for kTarget its target (on q's
+// hemisphere) and the angular velocity that turns q into it over the step.
+struct DrivenSegment {
+  Quat orientation;
+  Vec3 angular_velocity;        // body frame of `orientation`
+  Vec3 world_angular_velocity;  // world frame
+};
+DrivenSegment drive_state(const SegmentDrive& d, double t_end, double h, const Quat& q);
 
 }  // namespace corde

@@ -117,7 +117,7 @@ class Rod {
   bool has_external() const { return has_external_; }
   const std::vector<Vec3>& external_forces() const { return ext_f_; }
   const std::vector<Vec3>& external_torques() const { return ext_tau_; }
-  // Air drag on the nodes (none by default; boundary.h). Throws std::invalid_argument for a
+  // Air drag on the nodes (none by default; model/drag.h). Throws std::invalid_argument for a
   // negative or non-finite coefficient.
   void set_drag(const Drag& drag);
   const Drag& drag() const { return drag_; }

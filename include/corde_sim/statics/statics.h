@@ -16,8 +16,6 @@
 // of the forces (reported) to ~1e-8 of the loads.
 #pragma once
 
-#include <Eigen/SparseCore>
-
 #include "corde_sim/rod/rod.h"
 
 namespace corde {
@@ -65,14 +63,5 @@ struct StaticResult {
 // last iterate even when it did not converge.
 StaticResult solve_statics(Rod& rod, const Vec3& gravity, double t,
                            const StaticOptions& options = StaticOptions());
-
-// Symmetric Hessian of the total potential energy with respect to the free unknowns at the
-// current state (kinematic nodes and segments as they are), in the scaled variables above:
-// per node 3 displacements (2 in the plane if options.plane_normal is set), then per segment 3
-// body rotations times the mean segment length (1 in the planar case), node i before segment i.
-// Analytic (or, with options.finite_difference_hessian, fourth-order differences of the forces).
-// Its lowest eigenvalue turns negative where a compressed rod buckles. Velocities are zeroed.
-Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double t,
-                                           const StaticOptions& options = StaticOptions());
 
 }  // namespace corde

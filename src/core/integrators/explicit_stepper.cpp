@@ -33,10 +33,7 @@ void ExplicitStepper::free_motion(const Rod& rod, int, double t, double h, bool 
   }
   for (const NodeDrive& d : rod.node_drives()) {
     w[d.node] = 0.0;
-    if (d.kind == NodeDrive::Kind::kTarget)
-      v[d.node] = (d.target - rod.positions()[d.node]) / h;
-    else
-      drive_position(d, t_end, &v[d.node]);
+    v[d.node] = drive_state(d, t_end, h, rod.positions()[d.node]).velocity;
   }
   if (!spin) return;
   const int ns = rod.num_segments();
@@ -46,16 +43,8 @@ void ExplicitStepper::free_motion(const Rod& rod, int, double t, double h, bool 
     om[s] =
         rod.orientations()[s] * Vec3(rod.angular_velocities()[s] +
                                      h * rod.torques()[s].cwiseQuotient(rod.segment_inertia(s)));
-  for (const SegmentDrive& d : rod.segment_drives()) {
-    if (d.kind == SegmentDrive::Kind::kTarget) {
-      Quat rel = d.target.normalized() * rod.orientations()[d.segment].conjugate();
-      if (rel.w() < 0.0) rel.coeffs() *= -1.0;  // the shorter way, as the drive turns
-      const Eigen::AngleAxisd turn(rel);
-      om[d.segment] = (turn.angle() / h) * turn.axis();
-    } else {
-      drive_orientation(d, t_end, &om[d.segment]);
-    }
-  }
+  for (const SegmentDrive& d : rod.segment_drives())
+    om[d.segment] = drive_state(d, t_end, h, rod.orientations()[d.segment]).world_angular_velocity;
   for (const SegmentConstraint& c : rod.segment_constraints())
     om[c.segment] = c.axis * c.axis.dot(om[c.segment]);
 }

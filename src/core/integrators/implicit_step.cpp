@@ -6,6 +6,8 @@
 
 #include "corde_sim/linalg/newton.h"
 #include "corde_sim/math/so3.h"
+#include "corde_sim/model/drag.h"
+#include "corde_sim/model/loads.h"
 
 namespace corde {
 
@@ -55,14 +57,11 @@ void ImplicitEuler::setup_supports(Rod& rod, double t1) {
     q[c.segment] = (q0_[c.segment] * so3::exp(th)).normalized();
   }
   for (const NodeDrive& d : rod.node_drives()) {
-    x[d.node] = d.kind == NodeDrive::Kind::kTarget ? d.target : drive_position(d, t1);
+    x[d.node] = drive_position(d, t1);
     kind_[2 * d.node] = 1;
   }
   for (const SegmentDrive& d : rod.segment_drives()) {
-    Quat target =
-        d.kind == SegmentDrive::Kind::kTarget ? d.target.normalized() : drive_orientation(d, t1);
-    if (target.coeffs().dot(q0_[d.segment].coeffs()) < 0.0) target.coeffs() *= -1.0;
-    q[d.segment] = target;
+    q[d.segment] = drive_orientation_near(d, t1, q0_[d.segment]);
     kind_[2 * d.segment + 1] = 1;
   }
 }
@@ -90,22 +89,11 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
     }
   }
   if (drag_on_) {
-    // As Rod::drag_block: per node the chord across it, the length it stands for (its mass over
-    // the mass per length), coefficients at the start velocity.
-    const Drag& dr = rod.drag();
+    // The explicit force's drag (model/drag.h) with its coefficients held at the velocity vd.
     const double inv_mu = 1.0 / sec.mass_per_length;
     drag_.resize(nn);
-    for (int i = 0; i < nn; ++i) {
-      const Vec3 chord = xd[std::min(i + 1, ns)] - xd[std::max(i - 1, 0)];
-      const double len = chord.norm();
-      const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
-      const Vec3& v = vd[i];
-      const Vec3 vt = v.dot(t) * t, vn = v - vt;
-      const double cn = dr.linear_normal + dr.quadratic_normal * vn.norm();
-      const double ct = dr.linear_tangential + dr.quadratic_tangential * vt.norm();
-      const Mat3 tt = t * t.transpose();
-      drag_[i] = (rod.node_masses()[i] * inv_mu) * (cn * (Mat3::Identity() - tt) + ct * tt);
-    }
+    for (int i = 0; i < nn; ++i)
+      drag_[i] = drag_matrix(node_drag(rod.drag(), xd, i, vd[i], rod.node_masses()[i], inv_mu));
   }
 }
 
@@ -116,12 +104,8 @@ void ImplicitEuler::setup_loads(const Rod& rod, double t1) {
   for (const Load& l : rod.loads()) {
     const double f = l.scale(t1);
     if (f == 0.0) continue;
-    Vec3 value = f * l.value;
-    if (l.follower)  // turned with the segment at the start (BDF2: extrapolated to the end)
-      value =
-          (used_bdf2_ ? qx_
-                      : q0_)[l.kind == Load::Kind::kTorque ? l.index : std::min(l.index, ns - 1)] *
-          value;
+    // A follower turned with its segment at the start (BDF2: extrapolated to the end).
+    const Vec3 value = load_world(l, f, used_bdf2_ ? qx_ : q0_);
     (l.kind == Load::Kind::kForce ? forces_ : torques_).push_back({l.index, value});
   }
   if (rod.has_external()) {
@@ -602,12 +586,13 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   g_raw_.swap(g_);
   for (int i = 0; i < nn; ++i) v[i] = (x[i] - xt_[i]) / h;
   for (int s = 0; s < ns; ++s) w[s] = (theta_[s] + off_[s]) / h;
-  // Drives give their own velocities (as Rod::step's drives do).
+  // Drives other than targets give their own velocities (as Rod::step's drives do); a target's
+  // is the step's.
   for (const NodeDrive& d : rod.node_drives())
-    if (d.kind != NodeDrive::Kind::kTarget) drive_position(d, t1, &v[d.node]);
+    if (d.kind != NodeDrive::Kind::kTarget) v[d.node] = drive_state(d, t1, h, x[d.node]).velocity;
   for (const SegmentDrive& d : rod.segment_drives())
     if (d.kind != SegmentDrive::Kind::kTarget) {
-      Vec3 ww;
+      Vec3 ww;  // in the body frame the step left the segment in
       drive_orientation(d, t1, &ww);
       w[d.segment] = q[d.segment].conjugate() * ww;
     }

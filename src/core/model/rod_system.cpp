@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "corde_sim/math/so3.h"
+#include "corde_sim/model/loads.h"
 
 namespace corde {
 
@@ -143,8 +144,7 @@ double RodSystem::energy() const {
     for (int i = 0; i <= n; ++i) e -= r.node_masses()[i] * gravity.dot(x[i]);
   if (terms & kLoadTerm)
     for (const Load& l : r.loads())
-      if (!l.follower && l.kind == Load::Kind::kForce)
-        e -= load_scale * l.scale(t) * l.value.dot(x[l.index]);
+      if (load_has_potential(l)) e -= load_work(l, load_scale * l.scale(t), x[l.index]);
   return e;
 }
 
@@ -197,9 +197,9 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
       const double f = load_scale * l.scale(t);
       if (f == 0.0) continue;
       if (l.kind == Load::Kind::kForce)
-        g->segment<3>(node_index(l.index)) -= f * l.value;
+        g->segment<3>(node_index(l.index)) -= load_world(l, f, q);
       else
-        g->segment<3>(segment_index(l.index)) -= f * (q[l.index].conjugate() * l.value);
+        g->segment<3>(segment_index(l.index)) -= load_body_torque(l, f, q[l.index]);
     }
 }
 

@@ -54,6 +54,39 @@ Quat drive_orientation(const SegmentDrive& d, double t, Vec3* angular_velocity) 
   return q;
 }
 
+Quat drive_orientation_near(const SegmentDrive& d, double t, const Quat& near,
+                            Vec3* angular_velocity) {
+  Quat q = drive_orientation(d, t, angular_velocity);
+  if (q.coeffs().dot(near.coeffs()) < 0.0) q.coeffs() *= -1.0;
+  return q;
+}
+
+DrivenNode drive_state(const NodeDrive& d, double t_end, double h, const Vec3& x) {
+  DrivenNode s;
+  if (d.kind == NodeDrive::Kind::kTarget) {
+    s.velocity = (d.target - x) / h;
+    s.position = d.target;
+  } else {
+    s.position = drive_position(d, t_end, &s.velocity);
+  }
+  return s;
+}
+
+DrivenSegment drive_state(const SegmentDrive& d, double t_end, double h, const Quat& q) {
+  DrivenSegment s;
+  if (d.kind == SegmentDrive::Kind::kTarget) {
+    s.orientation = drive_orientation_near(d, t_end, q);
+    // The turn from q to the target, about an axis that is the same in both body frames.
+    const Eigen::AngleAxisd delta(q.conjugate() * s.orientation);
+    s.angular_velocity = (delta.angle() / h) * delta.axis();
+    s.world_angular_velocity = q * s.angular_velocity;
+  } else {
+    s.orientation = drive_orientation(d, t_end, &s.world_angular_velocity);
+    s.angular_velocity = s.orientation.conjugate() * s.world_angular_velocity;
+  }
+  return s;
+}
+
 Quat ghost_frame_at(const GhostFrame& g, double t) {
   if (!g.motion) return g.frame;
   return (g.motion->at(t).rotation * g.origin).normalized();

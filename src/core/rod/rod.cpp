@@ -5,6 +5,8 @@
 #include <stdexcept>
 
 #include "corde_sim/integrators/integrator_names.h"
+#include "corde_sim/model/drag.h"
+#include "corde_sim/model/loads.h"
 
 namespace corde {
 
@@ -219,21 +221,9 @@ void Rod::set_drag(const Drag& d) {
 }
 
 void Rod::drag_block(int node0, int node1) {
-  // Per node: the rod's direction there (the chord across the node), the length it stands for
-  // (half of each adjacent segment's rest length: its mass over the mass per length), and the
-  // drag per unit length of its velocity relative to still air.
-  const int n = num_segments();
   const double inv_mu = 1.0 / section_.mass_per_length;
-  for (int i = node0; i < node1; ++i) {
-    const Vec3 chord = x_[std::min(i + 1, n)] - x_[std::max(i - 1, 0)];
-    const double len = chord.norm();
-    const Vec3 t = len > 0.0 ? Vec3(chord / len) : Vec3::Zero();
-    const Vec3& v = v_[i];
-    const Vec3 vt = v.dot(t) * t, vn = v - vt;
-    const Vec3 f = -(drag_.linear_normal + drag_.quadratic_normal * vn.norm()) * vn -
-                   (drag_.linear_tangential + drag_.quadratic_tangential * vt.norm()) * vt;
-    f_[i] += (mass_[i] * inv_mu) * f;
-  }
+  for (int i = node0; i < node1; ++i)
+    f_[i] += drag_force(node_drag(drag_, x_, i, v_[i], mass_[i], inv_mu));
 }
 
 void Rod::clear_external() {
@@ -589,9 +579,9 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
     const double scale = l.scale(t);
     if (scale == 0.0) continue;
     if (force)
-      f_[l.index] += scale * (l.follower ? q_[std::min(l.index, n - 1)] * l.value : l.value);
+      f_[l.index] += load_world(l, scale, q_);
     else
-      tau_[l.index] += scale * (l.follower ? l.value : q_[l.index].conjugate() * l.value);
+      tau_[l.index] += load_body_torque(l, scale, q_[l.index]);
   }
   if (drag_.active()) drag_block(r.node0, r.node1);
   if (has_external_) {
@@ -697,12 +687,9 @@ void Rod::apply_drives(double t_end, double h) {
     Vec3& x = x_[d.node];
     Vec3& v = v_[d.node];
     const Vec3 v_old = v;
-    if (d.kind == NodeDrive::Kind::kTarget) {
-      v = (d.target - x) / h;
-      x = d.target;
-    } else {
-      x = drive_position(d, t_end, &v);
-    }
+    const DrivenNode s = drive_state(d, t_end, h, x);
+    x = s.position;
+    v = s.velocity;
     d.reaction = mass_[d.node] * (v - v_old) / h - f_[d.node];
   }
   for (SegmentDrive& d : segment_drives_) {
@@ -710,17 +697,9 @@ void Rod::apply_drives(double t_end, double h) {
     Vec3& w = w_[d.segment];
     const Vec3 w_old = w;
     const Quat q_old = q;
-    if (d.kind == SegmentDrive::Kind::kTarget) {
-      Quat target = d.target.normalized();
-      if (target.coeffs().dot(q.coeffs()) < 0.0) target.coeffs() *= -1.0;
-      const Eigen::AngleAxisd delta(q.conjugate() * target);
-      w = (delta.angle() / h) * delta.axis();
-      q = target;
-    } else {
-      Vec3 w_world;
-      q = drive_orientation(d, t_end, &w_world);
-      w = q.conjugate() * w_world;
-    }
+    const DrivenSegment s = drive_state(d, t_end, h, q);
+    q = s.orientation;
+    w = s.angular_velocity;
     const Vec3& in = inertia_[d.segment];
     const Vec3 body =
         in.cwiseProduct(w - w_old) / h + w_old.cross(in.cwiseProduct(w_old)) - tau_[d.segment];

@@ -7,6 +7,7 @@
 
 #include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/model/element_energies.h"
+#include "corde_sim/model/loads.h"
 #include "corde_sim/stability/explicit_step_limit.h"
 
 namespace corde {
@@ -235,7 +236,7 @@ void StepGuard::add_step_work(const World& world, double h) {
       w += std::abs(e1 - e0);
     }
     for (const Load& l : rod.loads()) {
-      const double f = l.value.norm() * l.scale(t1);
+      const double f = load_magnitude(l, l.scale(t1));
       if (f == 0.0) continue;
       if (l.kind == Load::Kind::kForce)
         w += f * v[l.index].norm() * h;

@@ -9,7 +9,9 @@
 
 #include "corde_sim/grasp/grasp.h"
 #include "corde_sim/grasp/reactions.h"
+#include "corde_sim/model/loads.h"
 #include "corde_sim/scene/scene_runner.h"
+#include "corde_sim/statics/static_hessian.h"
 
 namespace corde {
 namespace {
@@ -93,7 +95,7 @@ void classify(Rod* rod, const Vec3& gravity, double t, RodEquilibrium* e) {
   e->negative_modes = e->zero_modes = 0;
   e->potential = true;
   for (const Load& l : rod->loads())
-    if (l.kind == Load::Kind::kTorque && l.scale(t) != 0.0) e->potential = false;
+    if (!load_has_potential(l) && l.scale(t) != 0.0) e->potential = false;
   if (h.rows() == 0) return;
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(h);
   const Eigen::VectorXd d = ldlt.vectorD();

@@ -10,7 +10,9 @@
 #include "corde_sim/linalg/block_tridiag_sparse.h"
 #include "corde_sim/linalg/newton.h"
 #include "corde_sim/math/so3.h"
+#include "corde_sim/model/loads.h"
 #include "corde_sim/model/rod_system.h"
+#include "corde_sim/statics/static_hessian.h"
 
 namespace corde {
 namespace {
@@ -111,12 +113,13 @@ class Problem {
     for (const Load& l : loads_) {
       const double k = lambda_ * l.scale(t_);
       if (k == 0.0) continue;
+      const Vec3 load = load_world(l, k, rod_.orientations());
       if (l.kind == Load::Kind::kForce) {
-        f[l.index] += k * l.value;
-        ref2 += (k * l.value).squaredNorm();
+        f[l.index] += load;
+        ref2 += load.squaredNorm();
       } else {
-        tau[l.index] += rod_.orientations()[l.index].conjugate() * (k * l.value);
-        ref2 += (k * l.value / lc_).squaredNorm();
+        tau[l.index] += load_body_torque(l, k, rod_.orientations()[l.index]);
+        ref2 += (load / lc_).squaredNorm();
       }
     }
     Eigen::VectorXd r(ndof_);
@@ -149,9 +152,9 @@ class Problem {
       const int p = l.kind == Load::Kind::kForce ? 2 * l.index : 2 * l.index + 1;
       if (count_[p] == 0) continue;
       if (l.kind == Load::Kind::kForce)
-        work += k * l.value.dot(rod_.positions()[l.index] - x0_[l.index]);
+        work += load_work(l, k, rod_.positions()[l.index] - x0_[l.index]);
       else
-        work += k * l.value.dot(q0_[l.index] * (alpha * rotation(l.index, d)));
+        work += load_work(l, k, q0_[l.index] * (alpha * rotation(l.index, d)));
     }
     return e.elastic() + e.gravity - work;
   }
@@ -161,8 +164,8 @@ class Problem {
     const Energies e = rod_.energies(lambda_ * gravity_);
     double work = 0.0;
     for (const Load& l : loads_)
-      if (l.kind == Load::Kind::kForce)
-        work += lambda_ * l.scale(t_) * l.value.dot(rod_.positions()[l.index]);
+      if (load_has_potential(l))
+        work += load_work(l, lambda_ * l.scale(t_), rod_.positions()[l.index]);
     return e.elastic() + e.gravity - work;
   }
 
@@ -276,7 +279,7 @@ class Problem {
     for (const Load& l : loads_) {
       const double k = lambda_ * l.scale(t_);
       if (k == 0.0 || l.kind != Load::Kind::kTorque) continue;
-      w[l.index] += rod_.orientations()[l.index].conjugate() * (k * l.value);
+      w[l.index] += load_body_torque(l, k, rod_.orientations()[l.index]);
     }
     const int ns = rod_.num_segments();
     Mat6 t;
@@ -400,11 +403,8 @@ class Problem {
     *x = rod_.positions();
     *q = rod_.orientations();
     for (const NodeDrive& d : rod_.node_drives()) (*x)[d.node] = drive_position(d, t_);
-    for (const SegmentDrive& d : rod_.segment_drives()) {
-      Quat target = drive_orientation(d, t_);
-      if (target.coeffs().dot((*q)[d.segment].coeffs()) < 0.0) target.coeffs() *= -1.0;
-      (*q)[d.segment] = target;
-    }
+    for (const SegmentDrive& d : rod_.segment_drives())
+      (*q)[d.segment] = drive_orientation_near(d, t_, (*q)[d.segment]);
   }
 
   // Puts kinematic DOFs at fraction `lambda` from (xs, qs) to (xt, qt) and moves the free nodes by

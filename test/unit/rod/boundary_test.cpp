@@ -1,4 +1,5 @@
-// Keyframed drives, sliding and hinge constraints and follower loads on a rod.
+// Keyframed drives and their state at a step's end, sliding and hinge constraints and follower
+// loads on a rod.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -147,6 +148,60 @@ TEST(Constraints, HingeTurnsAboutItsAxisOnly) {
   EXPECT_GT(std::abs(rel.vec().dot(c.axis)), 1e-3);  // it turned
   const Vec3 omega = rod.orientations()[s] * rod.angular_velocities()[s];
   EXPECT_LT((omega - c.axis * c.axis.dot(omega)).norm(), 1e-12);
+}
+
+// A target drive reaches its target over the step: a node at (target - x) / h, a segment turned
+// the short way, its body and world angular velocities one rotation.
+TEST(DriveState, TargetsAreReachedOverTheStep) {
+  const double h = 0.01;
+  NodeDrive nd;
+  nd.kind = NodeDrive::Kind::kTarget;
+  nd.target = Vec3(0.1, -0.2, 0.3);
+  const Vec3 x(0.1, -0.2, 0.25);
+  const DrivenNode n = drive_state(nd, 1.0, h, x);
+  EXPECT_EQ(n.position, nd.target);
+  EXPECT_LT((x + h * n.velocity - nd.target).norm(), 1e-15);
+
+  SegmentDrive sd;
+  sd.kind = SegmentDrive::Kind::kTarget;
+  const Quat q(Eigen::AngleAxisd(0.4, Vec3(0.2, 1.0, 0.0).normalized()));
+  const Quat turn(Eigen::AngleAxisd(0.3, Vec3(1.0, 0.0, 0.5).normalized()));
+  sd.target.coeffs() = -2.0 * (q * turn).coeffs();  // not unit, and on the other hemisphere
+  const DrivenSegment s = drive_state(sd, 1.0, h, q);
+  EXPECT_GT(s.orientation.coeffs().dot(q.coeffs()), 0.0);
+  EXPECT_LT((s.orientation.coeffs() - (q * turn).coeffs()).norm(), 1e-15);
+  const Vec3 body = h * s.angular_velocity;
+  const Quat reached = q * Quat(Eigen::AngleAxisd(body.norm(), body.normalized()));
+  EXPECT_LT((reached.coeffs() - s.orientation.coeffs()).norm(), 1e-14);
+  EXPECT_LT((s.world_angular_velocity - q * s.angular_velocity).norm(), 1e-15);
+  EXPECT_NEAR(body.norm(), 0.3, 1e-14);
+}
+
+// The other drives give their own state at the step's end, whatever the state at its start.
+TEST(DriveState, OtherDrivesGiveTheirOwnState) {
+  NodeDrive nd;
+  nd.kind = NodeDrive::Kind::kVelocity;
+  nd.origin = Vec3(1.0, 0.0, 0.0);
+  nd.velocity = Vec3(0.0, 0.5, 0.0);
+  Vec3 v;
+  const Vec3 x = drive_position(nd, 2.0, &v);
+  const DrivenNode n = drive_state(nd, 2.0, 0.01, Vec3(5.0, 5.0, 5.0));
+  EXPECT_EQ(n.position, x);
+  EXPECT_EQ(n.velocity, v);
+
+  SegmentDrive sd;
+  sd.kind = SegmentDrive::Kind::kSpin;
+  sd.origin = Quat(Eigen::AngleAxisd(0.4, Vec3::UnitY()));
+  sd.rate = 3.0;
+  Vec3 w;
+  const Quat q = drive_orientation(sd, 0.5, &w);
+  const DrivenSegment s = drive_state(sd, 0.5, 0.01, Quat::Identity());
+  EXPECT_EQ(s.orientation.coeffs(), q.coeffs());
+  EXPECT_EQ(s.world_angular_velocity, w);
+  EXPECT_LT((q * s.angular_velocity - w).norm(), 1e-14);
+  // drive_orientation_near only chooses the sign.
+  const Quat near = drive_orientation_near(sd, 0.5, Quat(-q.coeffs()));
+  EXPECT_EQ(near.coeffs(), -q.coeffs());
 }
 
 // A dead load keeps its world direction; a follower load turns with its segment.

@@ -10,6 +10,7 @@
 #include <iostream>
 
 #include "corde_sim/stability/explicit_step_limit.h"
+#include "corde_sim/statics/static_hessian.h"
 #include "validation_util.h"
 
 namespace corde {
