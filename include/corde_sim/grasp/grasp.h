@@ -15,12 +15,22 @@
 
 namespace corde {
 
+// How a grasp holds: rigidly (friction false, the default), or by friction (scene key grip):
+// fingers pressing with `force` (N) hold the cable while the force along it stays within
+// mu * force and let it slide through otherwise (friction_grasp.h).
+struct GripSpec {
+  bool friction = false;
+  double force = 0.0;  // N, >= 0
+  double mu = 0.0;     // >= 0
+};
+
 // A place on a rod that something holds.
 struct GraspSpec {
   std::string name, rod;
   enum class Place { kStart, kEnd, kNode, kArcLength } place = Place::kEnd;
   double value = 0.0;            // node index or arc length (m) for kNode / kArcLength
   bool hold_orientation = true;  // hold the frame too (rotating the holder twists the rod)
+  GripSpec grip;                 // rigid, or held by friction
   // Keyframed motion of the holder from where it takes hold (its pose then: segment_pose()), about
   // the holder's origin; null: the holder stays (corde_run) or follows its inputs (the node).
   std::shared_ptr<const Motion> motion;
@@ -40,6 +50,9 @@ struct Grasp {
   int segment = 0;
   Eigen::Isometry3d offset = Eigen::Isometry3d::Identity();  // segment pose in the holder frame
   bool hold_orientation = true;
+  // The distance at which hold() keeps the segment's nodes (m); 0: its rest length. A friction
+  // grasp holds a segment at the length it has when it takes hold, so that nothing jumps.
+  double length = 0.0;
 };
 
 // The segment a spec refers to: start -> 0, end -> N-1, node k -> min(k, N-1), arc length s ->
@@ -68,10 +81,10 @@ Eigen::Isometry3d segment_pose(const Rod& rod, int segment);
 Grasp make_grasp(const Rod& rod, const GraspSpec& spec, const Eigen::Isometry3d& holder_pose);
 
 // Drives the grasped segment to holder_pose * offset by the end of the next step: its two nodes
-// to midpoint -/+ (rest length / 2) d3 (NodeDrive kTarget) and, if hold_orientation, its
-// orientation (SegmentDrive kTarget). Call before each step with the holder's pose at the end of
-// that step; drives already present on those nodes or that segment are replaced. Allocates
-// nothing once the drives exist.
+// to midpoint -/+ (rest length, or grasp.length, / 2) d3 (NodeDrive kTarget) and, if
+// hold_orientation, its orientation (SegmentDrive kTarget). Call before each step with the holder's
+// pose at the end of that step; drives already present on those nodes or that segment are replaced.
+// Allocates nothing once the drives exist.
 void hold(Rod& rod, const Grasp& grasp, const Eigen::Isometry3d& holder_pose);
 
 // Removes the grasp's target drives (others, e.g. a fixed clamp on a shared node, stay). The

@@ -12,6 +12,7 @@
 #include <map>
 #include <string>
 
+#include "corde_sim/grasp/friction_grasp.h"
 #include "corde_sim/grasp/grasp.h"
 #include "corde_sim/grasp/holder.h"
 #include "corde_sim/world/world.h"
@@ -27,7 +28,11 @@ struct GraspState {
   double twist_rate = 0.0;                           // rad/s about the held segment's tangent
   double twist_angle = 0.0;                          // rad accumulated, in (-pi, pi]
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // applied wrench, world frame, at the midpoint
-  double arc_length = 0.0;   // rest arc length of the grasped segment's midpoint (m)
+  double arc_length = 0.0;  // rest arc length of the grasped segment's midpoint (m)
+  // A friction grasp's state (grip.on; GraspSpec::grip): sticking or slipping, the arc length at
+  // the grip point, the slip velocity. A slipping grasp's `grasp.segment` is the segment under
+  // its grip point, which changes as the cable slides.
+  FrictionGrip grip;
   HolderClip clip;           // limits hit since the caller last cleared it
   bool hold_pending = true;  // the drives must be set again at the next step
   // The holder stalled at the material's strain limit (HolderLimits::stall_at_max_strain): its
@@ -66,6 +71,7 @@ class GraspSet {
   std::string add(World& world, const GraspSpec& spec, const Eigen::Isometry3d& holder,
                   const Eigen::Isometry3d* offset, double now);
   // Lets go; the wrench keeps acting on the rod. Returns false if no held grasp has that name.
+  // (A friction grasp also lets go by itself when the cable slides out past an end: after_step.)
   bool release(World& world, const std::string& name);
   // Holds the grasp's segment again from a new holder pose: the offset is re-recorded (no offset)
   // or the holder glides there (an offset), as in add().
@@ -86,6 +92,9 @@ class GraspSet {
                 double duration);
   void set_wrench(World& world, const std::string& name, const Vec3& force, const Vec3& torque);
   void set_twist_rate(const std::string& name, double rate);
+  // A friction grasp's grip force (N, finite and >= 0; the caller checks), from the next step.
+  // False (nothing changes) for a name that is not a friction grasp.
+  bool set_grip_force(World& world, const std::string& name, double force);
   // Every holder stops where it is (after the state was restored from a snapshot).
   void stop_all();
 
@@ -99,13 +108,22 @@ class GraspSet {
   // is instead (GraspState::stalled); motions that shorten it are taken. Returns how many holders
   // stalled in this step that had not been stalled. Allocates nothing.
   int before_step(World& world, double t, double h, const HolderLimits& limits);
-  void after_step(const World& world, double h);
+  // Adds up the reactions of the step and moves the friction grasps on (friction_grasp.h): a
+  // sticking one whose force along the cable exceeded mu N slides from the next step, a sliding
+  // one whose slip stopped or turned sticks, and a sliding one follows its grip point to the next
+  // segment or, past the rod's start or end, lets go (FrictionGrip::slid_out). Returns how many
+  // grasps let go so. Allocates nothing once each rod's supports existed.
+  int after_step(World& world, double h);
 
   // Mean reaction since the last call in the frame of the holder's current pose (holder_pose(),
   // the twist turned in): the force the rod exerts on the holder and its torque about the
   // holder's origin. False when no step was
   // taken since (nothing to report).
   bool take_reaction(const std::string& name, Vec3* force, Vec3* torque);
+  // A friction grasp's mean slip velocity since the last call: the rate at which the rest arc
+  // length at its grip point changed (m/s; negative: towards the rod's start). False when it is
+  // not a friction grasp or no step was taken since.
+  bool take_slip(const std::string& name, double* velocity);
 
   // After rod `rod` was resampled (its segment indices changed): every grasp on it holds the
   // segment at its place again, the holders where they are: `start` and `end` the new first and
@@ -114,7 +132,11 @@ class GraspSet {
   void remake_on(World& world, int rod);
 
  private:
-  void apply_wrenches(World& world, int rod) const;
+  // The rod's external forces from the grasps' wrenches and the slipping grasps' friction.
+  void apply_wrenches(World& world, int rod);
+  // A friction grasp's state after a step (after_step); true when it let go.
+  bool step_grip(World& world, GraspState* g, double h);
+  void stick(World& world, GraspState* g);
   std::map<std::string, GraspState> grasps_;
 };
 

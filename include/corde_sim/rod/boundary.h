@@ -51,7 +51,10 @@ struct NodeConstraint {
   int node = 0;
   Vec3 point = Vec3::Zero();
   Vec3 direction = Vec3::UnitX();  // unit: the line's direction, or the plane's normal
-  Vec3 reaction = Vec3::Zero();    // output: the constraint force of the last step (world, N)
+  // The line's or plane's own velocity (world, m/s), for a support that moves (a slipping grasp:
+  // `point` is then where the line is at the step's end); zero: a fixed line or plane.
+  Vec3 velocity = Vec3::Zero();
+  Vec3 reaction = Vec3::Zero();  // output: the constraint force of the last step (world, N)
 };
 
 // A segment that may only rotate about one world axis through its start orientation, e.g. its

@@ -34,6 +34,7 @@ struct Command {
     kWrench,     // grasp's applied wrench (world frame, at the held segment's midpoint)
     kTwistRate,  // grasp's twist rate about the held segment's tangent (rad/s)
     kRelease,    // grasp lets go (its script, if any, ends)
+    kGripForce,  // a friction grasp's grip force `grip_force` (N; GraspSet::set_grip_force)
   };
   Kind kind = Kind::kGoal;
   double time = 0.0;
@@ -42,6 +43,7 @@ struct Command {
   double duration = 0.0;
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
   double rate = 0.0;
+  double grip_force = 0.0;
 
   static Command goal(double time, const std::string& grasp, const Eigen::Isometry3d& pose,
                       double duration);
@@ -49,6 +51,8 @@ struct Command {
                         const Vec3& torque);
   static Command twist_rate(double time, const std::string& grasp, double rate);
   static Command release(double time, const std::string& grasp);
+  // Throws std::invalid_argument for a force that is negative or not finite.
+  static Command grip(double time, const std::string& grasp, double force);
 };
 
 // What happened while advancing, for the caller to report (take_events()).
@@ -56,7 +60,8 @@ struct SimulationEvent {
   enum class Kind {
     kGuard,        // the guard detected, acted or gave up (`guard`)
     kTookHold,     // a script took hold of its segment
-    kLetGo,        // a script (or a kRelease command) let go
+    kLetGo,        // a script (or a kRelease command) let go, or the cable slid out of a friction
+                   // grasp past its start or end (`text` says which)
     kCannotHold,   // a script could not take hold (`text` says why); it tries again next step
     kScriptEnded,  // a goal or release command ended a grasp's script (not again on a replay)
     kStalled,      // a grasp's holder stalled at its material's strain limit (`text` says where)
@@ -186,6 +191,7 @@ class Simulation {
              std::string text = std::string());
   void take_guard_events();
   void report_stalls(const World& w, double t);
+  void report_slid_out(double t);
 
   World own_;
   World* world_ = &own_;

@@ -69,7 +69,8 @@ Grasp make_grasp(const Rod& rod, const GraspSpec& spec, const Eigen::Isometry3d&
 void hold(Rod& rod, const Grasp& grasp, const Eigen::Isometry3d& holder_pose) {
   const Eigen::Isometry3d pose = holder_pose * grasp.offset;
   const Quat q(pose.linear());
-  const Vec3 half = (0.5 * rod.rest_lengths()[grasp.segment]) * pose.linear().col(2);
+  const double length = grasp.length > 0.0 ? grasp.length : rod.rest_lengths()[grasp.segment];
+  const Vec3 half = (0.5 * length) * pose.linear().col(2);
   const Vec3 targets[2] = {pose.translation() - half, pose.translation() + half};
   for (int k = 0; k < 2; ++k) {
     const int node = grasp.segment + k;

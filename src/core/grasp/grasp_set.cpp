@@ -140,6 +140,9 @@ std::string GraspSet::add(World& world, const GraspSpec& spec, const Eigen::Isom
   g.grasp.rod = spec.rod;
   g.grasp.segment = seg;
   g.grasp.hold_orientation = spec.hold_orientation;
+  g.grip.on = spec.grip.friction;
+  g.grip.force = spec.grip.force;
+  g.grip.mu = spec.grip.mu;
   attach(world, spec.name, holder, offset, now);
   if (had_wrench) apply_wrenches(world, old_rod);
   apply_wrenches(world, ri);
@@ -151,6 +154,11 @@ void GraspSet::attach(World& world, const std::string& name, const Eigen::Isomet
   GraspState* g = find(name);
   if (!g) return;
   Rod& rod = world.rods()[g->rod];
+  const bool was_slipping = g->grip.slipping;
+  if (was_slipping) {
+    release_sliding(rod, g->grasp);
+    g->grip.slipping = false;
+  }
   const Eigen::Isometry3d segment = segment_pose(rod, g->grasp.segment);
   if (offset) {
     g->grasp.offset = *offset;
@@ -162,8 +170,23 @@ void GraspSet::attach(World& world, const std::string& name, const Eigen::Isomet
   }
   g->twist_angle = 0.0;
   g->held = true;
+  // A friction grasp holds the segment at the length it has (it may take hold again and again).
+  const int s = g->grasp.segment;
+  g->grasp.length = g->grip.on ? (rod.positions()[s + 1] - rod.positions()[s]).norm() : 0.0;
   hold(rod, g->grasp, g->holder_pose());
   g->hold_pending = true;
+  if (g->grip.on) {
+    // The grip point and the fingers' axis: the segment's midpoint and tangent, in the holder's
+    // frame (the twist turns about that line, so it moves neither).
+    FrictionGrip& f = g->grip;
+    f.point = g->grasp.offset.translation();
+    f.axis = g->grasp.offset.linear().col(2);
+    f.arc = grip_arc(rod, g->grasp.segment, g->holder.pose() * f.point,
+                     g->holder.pose().linear() * f.axis, nullptr);
+    f.slip_velocity = f.slip_sum = f.slip_time = 0.0;
+    f.slid_out = 0;
+  }
+  if (was_slipping) apply_wrenches(world, g->rod);
 }
 
 bool GraspSet::release(World& world, const std::string& name) {
@@ -172,6 +195,11 @@ bool GraspSet::release(World& world, const std::string& name) {
   corde::release(world.rods()[g->rod], g->grasp);
   g->held = false;
   g->twist_rate = 0.0;
+  if (g->grip.slipping) {
+    release_sliding(world.rods()[g->rod], g->grasp);
+    g->grip.slipping = false;
+    apply_wrenches(world, g->rod);
+  }
   return true;
 }
 
@@ -205,17 +233,31 @@ void GraspSet::set_twist_rate(const std::string& name, double rate) {
   if (g && g->held) g->twist_rate = rate;
 }
 
+bool GraspSet::set_grip_force(World& world, const std::string& name, double force) {
+  GraspState* g = find(name);
+  if (!g || !g->grip.on) return false;
+  g->grip.force = force;
+  if (g->grip.slipping) apply_wrenches(world, g->rod);
+  return true;
+}
+
 void GraspSet::stop_all() {
   for (auto& kv : grasps_) kv.second.holder.stop();
 }
 
-void GraspSet::apply_wrenches(World& world, int rod_index) const {
+void GraspSet::apply_wrenches(World& world, int rod_index) {
   // The grasps are the only source of external forces so far: rebuild the rod's from all of them
   // (two grasps may share a node).
   Rod& rod = world.rods()[rod_index];
   rod.clear_external();
-  for (const auto& kv : grasps_) {
-    const GraspState& g = kv.second;
+  for (auto& kv : grasps_) {
+    GraspState& g = kv.second;
+    if (g.rod == rod_index && g.grip.slipping) {
+      // Kinetic friction against the slip, on the two nodes under the grip point.
+      const Vec3 f = g.grip.friction(g.holder.pose().linear() * g.grip.axis);
+      rod.add_external_force(g.grasp.segment, 0.5 * f);
+      rod.add_external_force(g.grasp.segment + 1, 0.5 * f);
+    }
     if (g.rod != rod_index || (g.force.isZero(0.0) && g.torque.isZero(0.0))) continue;
     // At the segment's midpoint: half on each of its nodes.
     rod.add_external_force(g.grasp.segment, 0.5 * g.force);
@@ -272,37 +314,150 @@ int GraspSet::before_step(World& world, double t, double h, const HolderLimits& 
     }
     if (g.twist_rate != 0.0)
       g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
-    hold(rod, g.grasp, g.holder_pose());
     g.hold_pending = false;
+    if (!g.grip.on) {
+      hold(rod, g.grasp, g.holder_pose());
+      continue;
+    }
+    // A friction grasp: the grip point's line at the step's end, moving with the holder.
+    const Eigen::Isometry3d& pose = g.holder.pose();
+    const Vec3 c = pose * g.grip.point, a = pose.linear() * g.grip.axis;
+    g.grip.line_velocity =
+        g.holder.velocity() + g.holder.angular_velocity().cross(c - pose.translation());
+    if (!g.grip.slipping) {
+      hold(rod, g.grasp, g.holder_pose());
+      continue;
+    }
+    hold_sliding(rod, g.grasp, c, a, g.grip.line_velocity);
+    if (!g.holder.angular_velocity().isZero(0.0)) apply_wrenches(world, g.rod);  // turns with it
   }
   return stalls;
 }
 
-void GraspSet::after_step(const World& world, double h) {
-  (void)h;  // the drives' reactions are per step already
+int GraspSet::after_step(World& world, double h) {
   // The rod exerts on the holder the opposite of what the grasp's drives exerted on the held
   // items over the step: their reactions (boundary.h), which every integrator records with one
   // meaning, m dv/dt - f on each node and J dw/dt + w x J w - tau on the segment (the implicit
   // methods: the residual of those equations at the step's end). The nodes' forces act about the
-  // holder's origin at the step's start.
+  // holder's origin at the step's start. A slipping friction grasp exerted its line constraints'
+  // reactions and the friction force.
+  int let_go = 0;
   for (auto& kv : grasps_) {
     GraspState& g = kv.second;
     if (!g.held) continue;
     const Rod& rod = world.rods()[g.rod];
     const int s = g.grasp.segment;
     Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
+    const Vec3 friction =
+        g.grip.slipping ? g.grip.friction(g.holder.pose().linear() * g.grip.axis) : Vec3::Zero();
     for (int k = 0; k < 2; ++k) {
       const NodeDrive* d = rod.node_drive(s + k);
-      if (!d) continue;
-      force -= d->reaction;
-      torque -= (g.x0[k] - g.origin0).cross(d->reaction);
+      if (d) {
+        force -= d->reaction;
+        torque -= (g.x0[k] - g.origin0).cross(d->reaction);
+        continue;
+      }
+      if (!g.grip.slipping) continue;
+      for (const NodeConstraint& c : rod.node_constraints())
+        if (c.node == s + k) {
+          const Vec3 r = c.reaction + 0.5 * friction;
+          force -= r;
+          torque -= (g.x0[k] - g.origin0).cross(r);
+        }
     }
     if (g.grasp.hold_orientation)
       if (const SegmentDrive* d = rod.segment_drive(s)) torque -= d->reaction;
     g.reaction_force_sum += force;
     g.reaction_torque_sum += torque;
     ++g.reaction_steps;
+    if (g.grip.on && step_grip(world, &g, h)) ++let_go;
   }
+  return let_go;
+}
+
+bool GraspSet::step_grip(World& world, GraspState* g, double h) {
+  Rod& rod = world.rods()[g->rod];
+  FrictionGrip& f = g->grip;
+  const Eigen::Isometry3d& pose = g->holder.pose();
+  const Vec3 c = pose * f.point, a = pose.linear() * f.axis;
+  double fraction = 0.5;
+  const double arc = grip_arc(rod, g->grasp.segment, c, a, &fraction);
+  f.slip_velocity = (arc - f.arc) / h;
+  f.slip_sum += arc - f.arc;
+  f.slip_time += h;
+  f.arc = arc;
+  f.slid_out = 0;
+  if (!f.slipping) {
+    // Sticking: slides from the next step when the drives held the cable along its axis with more
+    // than mu N. The cable then moves the way the force on it (minus the reaction) pulls.
+    Vec3 held = Vec3::Zero();
+    for (int k = 0; k < 2; ++k)
+      if (const NodeDrive* d = rod.node_drive(g->grasp.segment + k)) held += d->reaction;
+    const double along = held.dot(a);
+    if (!(std::abs(along) > f.limit())) return false;
+    f.slipping = true;
+    f.direction = along > 0.0 ? -1.0 : 1.0;
+    f.line_velocity =
+        g->holder.velocity() + g->holder.angular_velocity().cross(c - pose.translation());
+    hold_sliding(rod, g->grasp, c, a, f.line_velocity);
+    g->hold_pending = true;
+    apply_wrenches(world, g->rod);
+    return false;
+  }
+  // Slipping: the slip stopped or turned within the step -> sticks where it is.
+  const int s0 = g->grasp.segment;
+  const Vec3 v = 0.5 * (rod.velocities()[s0] + rod.velocities()[s0 + 1]);
+  if (!(f.direction * (v - f.line_velocity).dot(a) > 0.0)) {
+    stick(world, g);
+    return false;
+  }
+  // The grip point left the segment: the next segment along takes the line constraints, or,
+  // past the rod's start or end, the cable is out of the fingers.
+  bool moved = false;
+  for (int guard = 0; guard < rod.num_segments() && (fraction < 0.0 || fraction > 1.0); ++guard) {
+    const int s = g->grasp.segment;
+    const int next = fraction < 0.0 ? s - 1 : s + 1;
+    if (next < 0 || next >= rod.num_segments()) {
+      release_sliding(rod, g->grasp);
+      f.slipping = false;
+      f.slid_out = next < 0 ? -1 : 1;
+      g->held = false;
+      g->twist_rate = 0.0;
+      apply_wrenches(world, g->rod);
+      return true;
+    }
+    // A node held by something else (a clamp, another grasp) stops the slide there.
+    if (node_taken(rod, next < s ? next : next + 1, s)) {
+      stick(world, g);
+      return false;
+    }
+    release_sliding(rod, g->grasp);
+    g->grasp.segment = next;
+    hold_sliding(rod, g->grasp, c, a, f.line_velocity);
+    grip_arc(rod, next, c, a, &fraction);
+    moved = true;
+  }
+  if (moved) {
+    g->arc_length = midpoint_arc_length(rod, g->grasp.segment);
+    g->hold_pending = true;
+    apply_wrenches(world, g->rod);
+  }
+  return false;
+}
+
+void GraspSet::stick(World& world, GraspState* g) {
+  // Holds the segment under the grip point rigidly where it is now: the offset is recorded again
+  // (the twist about the fingers' axis kept), so nothing jumps.
+  Rod& rod = world.rods()[g->rod];
+  release_sliding(rod, g->grasp);
+  g->grip.slipping = false;
+  const Eigen::Isometry3d spin(Eigen::AngleAxisd(-g->twist_angle, Vec3::UnitZ()));
+  g->grasp.offset = g->holder.pose().inverse() * segment_pose(rod, g->grasp.segment) * spin;
+  const int s = g->grasp.segment;
+  g->grasp.length = (rod.positions()[s + 1] - rod.positions()[s]).norm();
+  hold(rod, g->grasp, g->holder_pose());
+  g->hold_pending = true;
+  apply_wrenches(world, g->rod);
 }
 
 bool GraspSet::take_reaction(const std::string& name, Vec3* force, Vec3* torque) {
@@ -314,6 +469,14 @@ bool GraspSet::take_reaction(const std::string& name, Vec3* force, Vec3* torque)
   g->reaction_force_sum.setZero();
   g->reaction_torque_sum.setZero();
   g->reaction_steps = 0;
+  return true;
+}
+
+bool GraspSet::take_slip(const std::string& name, double* velocity) {
+  GraspState* g = find(name);
+  if (!g || !g->grip.on || !(g->grip.slip_time > 0.0)) return false;
+  *velocity = g->grip.slip_sum / g->grip.slip_time;
+  g->grip.slip_sum = g->grip.slip_time = 0.0;
   return true;
 }
 
@@ -334,6 +497,10 @@ void GraspSet::remake_on(World& world, int rod_index) {
       // Keep the holder; record the new segment's offset from it, so nothing jumps.
       const Eigen::Isometry3d holder = g.holder_pose();
       g.grasp.offset = holder.inverse() * segment_pose(rod, g.grasp.segment);
+      if (g.grip.on) {
+        const int s = g.grasp.segment;
+        g.grasp.length = (rod.positions()[s + 1] - rod.positions()[s]).norm();
+      }
       g.holder.reset(holder);
       g.twist_angle = 0.0;
       hold(rod, g.grasp, holder);

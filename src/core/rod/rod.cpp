@@ -176,6 +176,14 @@ void Rod::add_segment_constraint(const SegmentConstraint& c) {
   segment_constraints_.push_back(k);
 }
 
+bool Rod::remove_node_constraint(int node) {
+  auto it = std::find_if(node_constraints_.begin(), node_constraints_.end(),
+                         [&](const NodeConstraint& c) { return c.node == node; });
+  if (it == node_constraints_.end()) return false;
+  node_constraints_.erase(it);
+  return true;
+}
+
 bool Rod::remove_node_drive(int node) {
   auto it = std::find_if(node_drives_.begin(), node_drives_.end(),
                          [&](const NodeDrive& d) { return d.node == node; });
@@ -713,9 +721,11 @@ void Rod::apply_drives(double t_end, double h) {
     if (c.kind == NodeConstraint::Kind::kLine) {
       x = c.point + a * a.dot(x - c.point);
       v = a * a.dot(v);
+      if (!c.velocity.isZero(0.0)) v += c.velocity - a * a.dot(c.velocity);  // moves across
     } else {
       x -= a * a.dot(x - c.point);
       v -= a * a.dot(v);
+      if (!c.velocity.isZero(0.0)) v += a * a.dot(c.velocity);
     }
     c.reaction = mass_[c.node] * (v - v_free) / h;
   }

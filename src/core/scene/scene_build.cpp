@@ -351,6 +351,13 @@ GraspSpec read_grasp(const Value& v, const Scene& scene, std::vector<RodEntry>* 
     }
   }
   if (auto p = m.find("hold_orientation")) g.hold_orientation = p->boolean();
+  if (auto p = m.find("grip")) {  // a friction grasp (grasp/friction_grasp.h)
+    Map grip(*p);
+    g.grip.friction = true;
+    g.grip.force = grip.get("force").non_negative(SceneBounds::max_force, "N");
+    g.grip.mu = grip.get("mu").non_negative(SceneBounds::max_factor, "");
+    grip.finish();
+  }
   if (auto p = m.find("grasp_time")) g.grasp_time = p->non_negative(SceneBounds::max_time, "s");
   if (auto p = m.find("release_time")) {
     g.release_time = p->non_negative(SceneBounds::max_time, "s");

@@ -110,7 +110,20 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   // grasp with grasp_time or release_time takes hold and lets go in the step nearest those times.
   Simulation sim(options.guard);
   sim.attach(&scene->world);
-  for (const GraspSpec& spec : scene->grasps) sim.add_script(spec, ScriptDrive::kExact);
+  for (const GraspSpec& spec : scene->grasps) {
+    if (!spec.grip.friction) {
+      sim.add_script(spec, ScriptDrive::kExact);
+      continue;
+    }
+    // A friction grasp slides through its fingers: one of the driver's grasps, its holder on the
+    // keyframes (the holder limits apply).
+    World& w = sim.world();
+    const Rod& rod = w.rod(spec.rod);
+    const std::string error =
+        sim.grasps().add(w, spec, segment_pose(rod, grasp_segment(rod, spec)), nullptr, w.time());
+    if (!error.empty()) throw SceneError("grasp '" + spec.name + "': " + error);
+    sim.add_script(spec, ScriptDrive::kHolder);
+  }
   const World& world = sim.world();
   // Deep contacts: counted every step, reported (throttled) with the rods and obstacles named.
   double next_deep_report = -INFINITY;

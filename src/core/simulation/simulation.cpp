@@ -42,6 +42,21 @@ Command Command::twist_rate(double time, const std::string& grasp, double rate) 
   return c;
 }
 
+Command Command::grip(double time, const std::string& grasp, double force) {
+  if (!(force >= 0.0) || !std::isfinite(force)) {
+    char buf[120];
+    std::snprintf(buf, sizeof buf, "grasp '%.40s': grip force %g N is not a finite force >= 0",
+                  grasp.c_str(), force);
+    throw std::invalid_argument(buf);
+  }
+  Command c;
+  c.kind = Kind::kGripForce;
+  c.time = time;
+  c.grasp = grasp;
+  c.grip_force = force;
+  return c;
+}
+
 Command Command::release(double time, const std::string& grasp) {
   Command c;
   c.kind = Kind::kRelease;
@@ -241,6 +256,9 @@ void Simulation::apply(World* w, const Command& c, bool first) {
     case Command::Kind::kTwistRate:
       grasps_.set_twist_rate(c.grasp, c.rate);
       return;
+    case Command::Kind::kGripForce:
+      grasps_.set_grip_force(*w, c.grasp, c.grip_force);
+      return;
     case Command::Kind::kRelease:
       if (holder_script) end_script_at(k, c.time, first);
       if (grasps_.release(*w, c.grasp) && first)
@@ -321,7 +339,7 @@ void Simulation::step_once(World* w) {
   if (!grasps_.empty() && grasps_.before_step(*w, t, h, holder_limits_) > 0) report_stalls(*w, t);
   if (mover_) mover_(w, h);
   w->step();
-  if (!grasps_.empty()) grasps_.after_step(*w, h);
+  if (!grasps_.empty() && grasps_.after_step(*w, h) > 0) report_slid_out(t + h);
   if (observer_) observer_(*w);
 }
 
@@ -380,6 +398,19 @@ void Simulation::report_stalls(const World& w, double t) {
                   rod.name().c_str(), 100.0 * g.stall_strain, g.grasp.segment, g.stall_anchor,
                   100.0 * rod.section().max_strain);
     event(SimulationEvent::Kind::kStalled, t, kv.first, text);
+  }
+}
+
+void Simulation::report_slid_out(double t) {
+  for (const auto& kv : grasps_.grasps()) {
+    const int out = kv.second.grip.slid_out;
+    if (out == 0) continue;
+    grasps_.find(kv.first)->grip.slid_out = 0;
+    // Its script, if any, ends: it would take hold again where the cable fell.
+    const int k = script_index(kv.first);
+    if (k >= 0) end_script_at(static_cast<size_t>(k), t, false);
+    event(SimulationEvent::Kind::kLetGo, t, kv.first,
+          std::string("the cable slid out of the grip past its ") + (out < 0 ? "start" : "end"));
   }
 }
 

@@ -177,6 +177,63 @@ TEST(NoAllocation, GraspHolderStallAllocatesNothing) {
   EXPECT_TRUE(world.finite());
 }
 
+// A friction grasp on a hanging rope: sticking, sliding (line constraints, friction as an external
+// force), moving from segment to segment, and sticking again when the grip force rises allocate
+// nothing once each kind of support existed, under an explicit and an implicit method.
+TEST(NoAllocation, FrictionGraspSlidingAllocatesNothing) {
+  for (Integrator integrator : {Integrator::kSplitRotation, Integrator::kImplicitEuler}) {
+    SCOPED_TRACE(integrator_name(integrator));
+    World world;
+    world.integrator = integrator;
+    world.time_step = is_implicit(integrator) ? 1e-4 : 2e-5;
+    RodSpec rs;
+    rs.name = "rope";
+    rs.elements = 20;
+    rs.shape.direction = -Vec3::UnitZ();
+    rs.shape.reference_d1 = Vec3::UnitX();
+    rs.shape.length = 0.5;
+    rs.section = make_section(material_preset("paper_rope").material, 0.01);
+    Rod& rod = world.add_rod(build_rod(rs));
+    double mass = 0.0;
+    for (double m : rod.node_masses()) mass += m;
+    GraspSpec spec;
+    spec.name = "g";
+    spec.rod = "rope";
+    spec.place = GraspSpec::Place::kArcLength;
+    spec.value = 0.2;
+    spec.grip = {true, mass * 9.81, 0.5};  // mu N: half the weight
+    GraspSet grasps;
+    ASSERT_EQ(grasps.add(world, spec, segment_pose(rod, grasp_segment(rod, spec)), nullptr, 0.0),
+              "");
+    const int first = grasps.find("g")->grasp.segment;
+    auto step = [&] {
+      grasps.before_step(world, world.time(), world.time_step, HolderLimits());
+      world.step();
+      grasps.after_step(world, world.time_step);
+    };
+    // Until it slid into the next segment: every support made once.
+    for (int k = 0; k < 200000 && grasps.find("g")->grasp.segment == first; ++k) step();
+    ASSERT_EQ(grasps.find("g")->grasp.segment, first - 1);
+    long count = 0;
+    bool stuck = false;
+    {
+      CountAllocations counter;
+      for (int k = 0; k < 200000 && grasps.find("g")->grasp.segment > first - 3; ++k) step();
+      grasps.set_grip_force(world, "g", 20.0 * mass * 9.81);
+      for (int k = 0; k < 20000 && !stuck; ++k) {
+        step();
+        stuck = !grasps.find("g")->grip.slipping;
+      }
+      for (int k = 0; k < 100; ++k) step();
+      count = counter.count();
+    }
+    EXPECT_EQ(count, 0) << "heap allocations while sliding across segments and sticking";
+    EXPECT_EQ(grasps.find("g")->grasp.segment, first - 3);
+    EXPECT_TRUE(stuck);
+    EXPECT_TRUE(world.finite());
+  }
+}
+
 // The implicit step reuses its buffers after the first step (operator new only: Eigen's dynamic
 // vectors allocate with malloc, which this counter does not see; they keep their sizes here).
 TEST(NoAllocation, ImplicitStepAllocatesNothingAfterTheFirst) {
