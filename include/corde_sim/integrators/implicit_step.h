@@ -142,6 +142,7 @@ class ImplicitEuler {
   void set_options(const ImplicitOptions& o) { opt_ = o; }
 
  private:
+  class Iterations;  // the Newton iterations of step() (linalg/newton.h)
   void setup_supports(Rod& rod, double t1);
   void setup_dissipation(const Rod& rod, double h);
   void setup_loads(const Rod& rod, double t1);

@@ -281,6 +281,150 @@ bool ImplicitEuler::history_usable(const Rod& rod, double h) const {
   return true;
 }
 
+// Newton iterations on the shared solver (linalg/newton.h), with this step's matrices, chord
+// iterations and line search settings (its arithmetic as the step always had it).
+class ImplicitEuler::Iterations final : public NewtonProblem {
+ public:
+  Iterations(ImplicitEuler* e, Rod* rod, RodSystem* sys, double h, double lc, double tolerance,
+             ImplicitResult* res)
+      : e_(*e),
+        rod_(*rod),
+        sys_(*sys),
+        x_(rod->positions()),
+        q_(rod->orientations()),
+        h_(h),
+        lc_(lc),
+        tolerance_(tolerance),
+        res_(*res) {}
+
+  // |[f; tau / lc]|, the residual's scaled norm.
+  double norm_scaled(const Eigen::VectorXd& g) const {
+    double r2 = 0.0;
+    for (int k = 0; k < rod_.num_nodes(); ++k) {
+      r2 += g.segment<3>(6 * k).squaredNorm();
+      r2 += (g.segment<3>(6 * k + 3) / lc_).squaredNorm();
+    }
+    return std::sqrt(r2);
+  }
+  // The gradient, kept also before the supports' projection (the reactions at the end).
+  void full_gradient(Eigen::VectorXd* g, Eigen::VectorXd* raw) {
+    e_.gradient(rod_, sys_, h_, g);
+    theta_stale_ = false;
+    *raw = *g;
+    e_.project_gradient(g);
+  }
+  void set_theta() {
+    for (size_t s = 0; s < q_.size(); ++s) e_.theta_[s] = so3::log(e_.q0_[s].conjugate() * q_[s]);
+    theta_stale_ = false;
+  }
+
+  double residual_norm() override { return norm_scaled(e_.g_); }
+  Check check(double residual) override {
+    res_.residual = residual;
+    if (residual <= tolerance_) {
+      res_.converged = true;
+      return Check::kConverged;
+    }
+    // A kept factorisation that did not cut the residual to a quarter is no longer worth
+    // keeping, and Newton iterations factorise afresh until a step converges in one or none
+    // (the rod moves too much for chord iterations; the contact response may still keep one).
+    if (last_kept_ && residual > 0.25 * last_residual_) {
+      e_.factored_ = e_.have_factor_ = false;
+      e_.chord_ok_ = false;
+    }
+    last_residual_ = residual;
+    return Check::kContinue;
+  }
+  bool direction(int attempt, double* slope) override {
+    (void)attempt;
+    kept_ = e_.chord_ok_ && e_.factor_reusable(rod_);
+    ++res_.iterations;
+    // The exact Hessian converges quadratically; where it is not positive definite (frames
+    // sheared against their chords, a compressed chord) the definite variant stands in for
+    // this iteration.
+    if (!kept_) {
+      sys_.definite = false;
+      if (!e_.refactor(rod_, sys_, h_)) {
+        sys_.definite = true;
+        if (!e_.refactor(rod_, sys_, h_)) {  // cannot fail with the definite variant
+          e_.factored_ = false;
+          return false;
+        }
+      }
+    }
+    e_.factored_ = true;
+    last_kept_ = kept_;
+    e_.d_ = -e_.g_;
+    e_.solver_.solve(&e_.d_);
+    if (kept_) e_.project_gradient(&e_.d_);  // the supports' directions may have turned since
+    *slope = e_.g_.dot(e_.d_);
+    e_.xs_ = x_;
+    e_.qk_ = q_;
+    return true;
+  }
+  Retry rejected(int attempt) override {
+    (void)attempt;
+    x_ = e_.xs_;
+    q_ = e_.qk_;
+    set_theta();
+    if (kept_) {  // a stale direction: try again with the matrix at this iterate
+      e_.factored_ = e_.have_factor_ = false;
+      last_kept_ = false;
+      e_.chord_ok_ = false;
+      return Retry::kNextIteration;
+    }
+    full_gradient(&e_.g_, &e_.g_raw_);
+    return Retry::kStop;
+  }
+
+  // Along the retraction: positions added, rotations composed in the body frame.
+  void move(double alpha) override {
+    for (size_t i = 0; i < x_.size(); ++i) x_[i] = e_.xs_[i] + alpha * e_.d_.segment<3>(6 * i);
+    for (size_t s = 0; s < q_.size(); ++s)
+      q_[s] = (e_.qk_[s] * so3::exp(alpha * e_.d_.segment<3>(6 * s + 3))).normalized();
+    theta_stale_ = true;
+  }
+  double merit(double alpha) override {
+    (void)alpha;
+    if (theta_stale_) set_theta();
+    return e_.merit(rod_, sys_, h_);
+  }
+  // Phi at the iterate and the magnitude of the terms it sums (for telling its changes from
+  // round-off), evaluated only once a step needs them.
+  void base_merit(MeritAtIterate* m) override {
+    x_.swap(e_.xs_);
+    q_.swap(e_.qk_);
+    set_theta();
+    m->phi = e_.merit(rod_, sys_, h_);
+    const double scale = std::abs(m->phi) + std::abs(sys_.energy()) + 1e-300;
+    m->noise = 1e3 * std::numeric_limits<double>::epsilon() * scale;
+    x_.swap(e_.xs_);
+    q_.swap(e_.qk_);
+    set_theta();
+  }
+  double trial_residual() override {
+    full_gradient(&e_.g_trial_, &e_.g_raw_trial_);
+    return norm_scaled(e_.g_trial_);
+  }
+  void accept_trial() override {
+    e_.g_.swap(e_.g_trial_);
+    e_.g_raw_.swap(e_.g_raw_trial_);
+  }
+
+ private:
+  ImplicitEuler& e_;
+  Rod& rod_;
+  RodSystem& sys_;
+  std::vector<Vec3>& x_;
+  std::vector<Quat>& q_;
+  double h_, lc_, tolerance_;
+  ImplicitResult& res_;
+  double last_residual_ = 0.0;
+  bool last_kept_ = false;  // the last iteration ran on a kept factorisation
+  bool kept_ = false;
+  bool theta_stale_ = false;
+};
+
 ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
                                    const std::vector<Vec3>* predicted,
                                    const std::vector<Vec3>* predicted_torques) {
@@ -406,149 +550,6 @@ ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gra
   // Loads whose size overflows (a force of 1e200 N: |F|^2 is infinite) would make the tolerance
   // infinite and the step "converge" without moving: no step can meet them.
   const bool finite_loads = std::isfinite(ref);
-  // Newton iterations on the shared solver (linalg/newton.h), with this step's matrices, chord
-  // iterations and line search settings (its arithmetic as the step always had it).
-  class Iterations final : public NewtonProblem {
-   public:
-    Iterations(ImplicitEuler* e, Rod* rod, RodSystem* sys, double h, double lc, double tolerance,
-               ImplicitResult* res)
-        : e_(*e),
-          rod_(*rod),
-          sys_(*sys),
-          x_(rod->positions()),
-          q_(rod->orientations()),
-          h_(h),
-          lc_(lc),
-          tolerance_(tolerance),
-          res_(*res) {}
-
-    // |[f; tau / lc]|, the residual's scaled norm.
-    double norm_scaled(const Eigen::VectorXd& g) const {
-      double r2 = 0.0;
-      for (int k = 0; k < rod_.num_nodes(); ++k) {
-        r2 += g.segment<3>(6 * k).squaredNorm();
-        r2 += (g.segment<3>(6 * k + 3) / lc_).squaredNorm();
-      }
-      return std::sqrt(r2);
-    }
-    // The gradient, kept also before the supports' projection (the reactions at the end).
-    void full_gradient(Eigen::VectorXd* g, Eigen::VectorXd* raw) {
-      e_.gradient(rod_, sys_, h_, g);
-      theta_stale_ = false;
-      *raw = *g;
-      e_.project_gradient(g);
-    }
-    void set_theta() {
-      for (size_t s = 0; s < q_.size(); ++s) e_.theta_[s] = so3::log(e_.q0_[s].conjugate() * q_[s]);
-      theta_stale_ = false;
-    }
-
-    double residual_norm() override { return norm_scaled(e_.g_); }
-    Check check(double residual) override {
-      res_.residual = residual;
-      if (residual <= tolerance_) {
-        res_.converged = true;
-        return Check::kConverged;
-      }
-      // A kept factorisation that did not cut the residual to a quarter is no longer worth
-      // keeping, and Newton iterations factorise afresh until a step converges in one or none
-      // (the rod moves too much for chord iterations; the contact response may still keep one).
-      if (last_kept_ && residual > 0.25 * last_residual_) {
-        e_.factored_ = e_.have_factor_ = false;
-        e_.chord_ok_ = false;
-      }
-      last_residual_ = residual;
-      return Check::kContinue;
-    }
-    bool direction(int attempt, double* slope) override {
-      (void)attempt;
-      kept_ = e_.chord_ok_ && e_.factor_reusable(rod_);
-      ++res_.iterations;
-      // The exact Hessian converges quadratically; where it is not positive definite (frames
-      // sheared against their chords, a compressed chord) the definite variant stands in for
-      // this iteration.
-      if (!kept_) {
-        sys_.definite = false;
-        if (!e_.refactor(rod_, sys_, h_)) {
-          sys_.definite = true;
-          if (!e_.refactor(rod_, sys_, h_)) {  // cannot fail with the definite variant
-            e_.factored_ = false;
-            return false;
-          }
-        }
-      }
-      e_.factored_ = true;
-      last_kept_ = kept_;
-      e_.d_ = -e_.g_;
-      e_.solver_.solve(&e_.d_);
-      if (kept_) e_.project_gradient(&e_.d_);  // the supports' directions may have turned since
-      *slope = e_.g_.dot(e_.d_);
-      e_.xs_ = x_;
-      e_.qk_ = q_;
-      return true;
-    }
-    Retry rejected(int attempt) override {
-      (void)attempt;
-      x_ = e_.xs_;
-      q_ = e_.qk_;
-      set_theta();
-      if (kept_) {  // a stale direction: try again with the matrix at this iterate
-        e_.factored_ = e_.have_factor_ = false;
-        last_kept_ = false;
-        e_.chord_ok_ = false;
-        return Retry::kNextIteration;
-      }
-      full_gradient(&e_.g_, &e_.g_raw_);
-      return Retry::kStop;
-    }
-
-    // Along the retraction: positions added, rotations composed in the body frame.
-    void move(double alpha) override {
-      for (size_t i = 0; i < x_.size(); ++i) x_[i] = e_.xs_[i] + alpha * e_.d_.segment<3>(6 * i);
-      for (size_t s = 0; s < q_.size(); ++s)
-        q_[s] = (e_.qk_[s] * so3::exp(alpha * e_.d_.segment<3>(6 * s + 3))).normalized();
-      theta_stale_ = true;
-    }
-    double merit(double alpha) override {
-      (void)alpha;
-      if (theta_stale_) set_theta();
-      return e_.merit(rod_, sys_, h_);
-    }
-    // Phi at the iterate and the magnitude of the terms it sums (for telling its changes from
-    // round-off), evaluated only once a step needs them.
-    void base_merit(MeritAtIterate* m) override {
-      x_.swap(e_.xs_);
-      q_.swap(e_.qk_);
-      set_theta();
-      m->phi = e_.merit(rod_, sys_, h_);
-      const double scale = std::abs(m->phi) + std::abs(sys_.energy()) + 1e-300;
-      m->noise = 1e3 * std::numeric_limits<double>::epsilon() * scale;
-      x_.swap(e_.xs_);
-      q_.swap(e_.qk_);
-      set_theta();
-    }
-    double trial_residual() override {
-      full_gradient(&e_.g_trial_, &e_.g_raw_trial_);
-      return norm_scaled(e_.g_trial_);
-    }
-    void accept_trial() override {
-      e_.g_.swap(e_.g_trial_);
-      e_.g_raw_.swap(e_.g_raw_trial_);
-    }
-
-   private:
-    ImplicitEuler& e_;
-    Rod& rod_;
-    RodSystem& sys_;
-    std::vector<Vec3>& x_;
-    std::vector<Quat>& q_;
-    double h_, lc_, tolerance_;
-    ImplicitResult& res_;
-    double last_residual_ = 0.0;
-    bool last_kept_ = false;  // the last iteration ran on a kept factorisation
-    bool kept_ = false;
-    bool theta_stale_ = false;
-  };
   Iterations iterations(this, &rod, &sys, h, lc, tolerance, &res);
   iterations.full_gradient(&g_, &g_raw_);
   // A full step that cuts the residual to a quarter is taken without Phi (the common case, and
