@@ -53,6 +53,28 @@ Drag read_drag(const Value& v, double radius) {
   return d;
 }
 
+// A `loads` entry: a force on a node or a torque on a segment, the index left unresolved.
+LoadDescription describe_load(const Value& entry) {
+  Map m(entry);
+  LoadDescription d;
+  d.path = entry.path();
+  Load& l = d.load;
+  if (m.one_of({"node", "segment"}) == "node") {
+    l.kind = Load::Kind::kForce;
+    d.at = describe_index(m.get("node"), "node");
+    l.value = m.get("force").vec3(SceneBounds::max_force, "N");
+  } else {
+    l.kind = Load::Kind::kTorque;
+    d.at = describe_index(m.get("segment"), "segment");
+    l.value = m.get("torque").vec3(SceneBounds::max_torque, "N m");
+  }
+  if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative(SceneBounds::max_time, "s");
+  if (auto t = m.find("start_time")) l.t_start = t->non_negative(SceneBounds::max_time, "s");
+  if (auto k = m.find("kind")) l.follower = k->choice({"dead", "follower"}) == "follower";
+  m.finish();
+  return d;
+}
+
 // A rod's own keys (RodDescription), after the rods `before` it.
 RodDescription describe_rod(const Value& v, int index, const std::vector<RodDescription>& before,
                             const std::optional<Value>& default_state) {
@@ -97,6 +119,9 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
                   "perturbation) or set initial_state: given on the rod");
     r.equilibrium = state;
   }
+  if (auto l = m.find("loads"))
+    for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
+      r.loads.push_back(describe_load(item));
   return r;
 }
 

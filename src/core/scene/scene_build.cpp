@@ -30,19 +30,7 @@ struct Owners {
 
 // "start", "end" or an index in [0, count).
 int read_index(const Value& v, int count, const char* what) {
-  if (v.is_scalar() && v.node().Scalar() == "start") return 0;
-  if (v.is_scalar() && v.node().Scalar() == "end") return count - 1;
-  if (!v.is_scalar()) v.fail(std::string("expected a ") + what + " index, start or end");
-  double d = 0.0;
-  try {
-    d = v.node().as<double>();
-  } catch (const YAML::Exception&) {
-    v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
-  }
-  if (d != std::floor(d) || d < 0.0 || d > count - 1)
-    v.fail(std::string(what) + " index " + echo(v.node().Scalar()) + " out of range (0.." +
-           std::to_string(count - 1) + ", start or end)");
-  return static_cast<int>(d);
+  return resolve_index(describe_index(v, what), count, what);
 }
 
 // The one mode an entry gives among `modes` and a keyframed drive (keyframes, move_by, turns).
@@ -210,27 +198,18 @@ void read_boundary(const Value& entry, Rod* rod, Owners* owners, const std::stri
   b.finish();
 }
 
-void read_load(const Value& entry, Rod* rod, std::vector<std::string>* warnings) {
-  Map m(entry);
-  Load l;
+void build_load(const LoadDescription& d, Rod* rod, std::vector<std::string>* warnings) {
+  Load l = d.load;
   const int n = rod->num_segments();
-  if (m.one_of({"node", "segment"}) == "node") {
-    l.kind = Load::Kind::kForce;
-    l.index = read_index(m.get("node"), n + 1, "node");
-    l.value = m.get("force").vec3(SceneBounds::max_force, "N");
+  if (l.kind == Load::Kind::kForce) {
+    l.index = resolve_index(d.at, n + 1, "node");
     if (rod->node_drive(l.index))
-      warnings->push_back(entry.path() + ": force on a driven node has no effect");
+      warnings->push_back(d.path + ": force on a driven node has no effect");
   } else {
-    l.kind = Load::Kind::kTorque;
-    l.index = read_index(m.get("segment"), n, "segment");
-    l.value = m.get("torque").vec3(SceneBounds::max_torque, "N m");
+    l.index = resolve_index(d.at, n, "segment");
     if (rod->segment_drive(l.index))
-      warnings->push_back(entry.path() + ": torque on a driven segment has no effect");
+      warnings->push_back(d.path + ": torque on a driven segment has no effect");
   }
-  if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative(SceneBounds::max_time, "s");
-  if (auto t = m.find("start_time")) l.t_start = t->non_negative(SceneBounds::max_time, "s");
-  if (auto k = m.find("kind")) l.follower = k->choice({"dead", "follower"}) == "follower";
-  m.finish();
   rod->add_load(l);
 }
 
@@ -266,7 +245,7 @@ struct RodEntry {
 };
 
 // Builds a rod from its description, then reads what needs the built rod: its initial
-// velocities, boundary, loads and rotational_inertia_scale.
+// velocities and boundary, then resolves its loads and reads rotational_inertia_scale.
 void build_rod_entry(RodDescription* r, Scene* scene, std::vector<RodEntry>* entries,
                      const std::string& base) {
   Map& m = *r->map;
@@ -294,9 +273,7 @@ void build_rod_entry(RodDescription* r, Scene* scene, std::vector<RodEntry>* ent
       read_boundary(item, rod, &entry.owners, base, &support);
       scene->supports.push_back(support);
     }
-  if (auto l = m.find("loads"))
-    for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
-      read_load(item, rod, &scene->warnings);
+  for (const LoadDescription& l : r->loads) build_load(l, rod, &scene->warnings);
   // After the supports: `auto` reads the stability limits of the rod as it is held.
   if (auto p = m.find("rotational_inertia_scale")) read_inertia_scale(*p, rod, &scene->notes);
   m.finish();
@@ -394,6 +371,32 @@ std::vector<Value> limited_items(const Value& list, int limit, const char* what)
     list.fail("has " + std::to_string(list.node().size()) + " " + what +
               ", more than the limit of " + std::to_string(limit));
   return list.items();
+}
+
+IndexRef describe_index(const Value& v, const char* what) {
+  IndexRef ref;
+  ref.key = v;
+  if (v.is_scalar() && v.node().Scalar() == "start") return ref;
+  ref.kind = IndexRef::Kind::kEnd;
+  if (v.is_scalar() && v.node().Scalar() == "end") return ref;
+  if (!v.is_scalar()) v.fail(std::string("expected a ") + what + " index, start or end");
+  ref.kind = IndexRef::Kind::kIndex;
+  try {
+    ref.index = v.node().as<double>();
+  } catch (const YAML::Exception&) {
+    v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
+  }
+  return ref;
+}
+
+int resolve_index(const IndexRef& ref, int count, const char* what) {
+  if (ref.kind == IndexRef::Kind::kStart) return 0;
+  if (ref.kind == IndexRef::Kind::kEnd) return count - 1;
+  const double d = ref.index;
+  if (d != std::floor(d) || d < 0.0 || d > count - 1)
+    ref.key.fail(std::string(what) + " index " + echo(ref.key.node().Scalar()) +
+                 " out of range (0.." + std::to_string(count - 1) + ", start or end)");
+  return static_cast<int>(d);
 }
 
 // `initial_state`: given (the shape and velocities as described) or equilibrium.

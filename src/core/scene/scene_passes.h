@@ -2,11 +2,13 @@
 // loading").
 //   (a) describe_scene: the YAML tree (overrides applied) into a SceneDescription: the top-level
 //       settings, each rod's own keys (name, elements, material, shape, drag, contact, initial
-//       state) and what the scene asks of the automatic pass, read and validated; nothing built.
+//       state, loads with their node or segment unresolved) and what the scene asks of the
+//       automatic pass, read and validated; nothing built.
 //   (b) build_scene: the rods built from their descriptions, then the entries that need a built
 //       rod, read in file order against the rods built before them (node and segment indices,
 //       `end`, keyframes given as absolute poses and arc lengths): each rod's initial velocities,
-//       boundary, loads and rotational_inertia_scale, then contact settings, obstacles, grasps.
+//       boundary, loads (indices resolved) and rotational_inertia_scale, then contact settings,
+//       obstacles, grasps.
 //   (c) make_automatic_choices: on the built scene, initial_state: equilibrium, then time_step:
 //       auto and integrator: auto, each logged with its reason in Scene::notes or settled. It
 //       counts work, never time, so the result depends on the scene only. (elements: auto runs
@@ -22,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "corde_sim/model/loads.h"
 #include "corde_sim/scene/scene.h"
 #include "scene_reader.h"
 
@@ -40,6 +43,22 @@ struct AutomaticRequests {
   bool integrator_auto = false;
 };
 
+// A node or segment as the file gives it: `start`, `end` or an index, resolved against the built
+// rod in pass (b) (which checks the range and names `key` when it is out of it).
+struct IndexRef {
+  enum class Kind { kStart, kEnd, kIndex };
+  Kind kind = Kind::kStart;
+  double index = 0.0;  // kIndex: the number given (any value; the range is checked on resolving)
+  Value key{YAML::Node(), ""};
+};
+
+// A `loads` entry: the load with its index unresolved.
+struct LoadDescription {
+  std::string path;  // "rods[0].loads[1]"
+  Load load;         // all but index
+  IndexRef at;       // the node (force) or segment (torque)
+};
+
 // A rod's own keys, read in pass (a).
 struct RodDescription {
   std::string path;  // "rods[0]"
@@ -48,8 +67,9 @@ struct RodDescription {
   std::optional<ContactOptions> contact;
   std::optional<Value> equilibrium;  // the initial_state key that asks for it (the rod's or the
                                      // scene's)
-  // Its map: pass (b) reads initial, boundary, loads and rotational_inertia_scale from it, then
-  // refuses unknown keys.
+  std::vector<LoadDescription> loads;
+  // Its map: pass (b) reads initial, boundary and rotational_inertia_scale from it, then refuses
+  // unknown keys.
   std::optional<Map> map;
 };
 
@@ -82,6 +102,10 @@ void make_automatic_choices(Scene* scene, const AutomaticRequests& requests);
 std::vector<Value> limited_items(const Value& list, int limit, const char* what);
 // `initial_state`: given (the shape and velocities as described) or equilibrium.
 bool wants_equilibrium(const Value& v);
+// "start", "end" or a number, unresolved (pass a); fails on anything else, naming `what`.
+IndexRef describe_index(const Value& v, const char* what);
+// The index in [0, count) that `ref` names (pass b); fails naming the key when out of range.
+int resolve_index(const IndexRef& ref, int count, const char* what);
 
 }  // namespace scene_detail
 }  // namespace corde

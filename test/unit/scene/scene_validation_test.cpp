@@ -120,6 +120,28 @@ TEST(SceneValidation, IndicesOutOfRange) {
                "beyond the rod's length");
 }
 
+// A load's node or segment is read with the rod's description and resolved against the built
+// rod: the messages name the key and the value given, with the range of the rod as built.
+TEST(SceneValidation, LoadIndicesResolvedAgainstTheRod) {
+  const auto with_load = [](const std::string& load) {
+    return replace(kBase, "    boundary:", "    loads:\n      - " + load + "\n    boundary:");
+  };
+  expect_error(with_load("{node: 2.5, force: [0, 0, 1]}"), "rods[0].loads[0].node",
+               "node index '2.5' out of range (0..10, start or end)");
+  expect_error(with_load("{segment: 10, torque: [0, 0, 1]}"), "rods[0].loads[0].segment",
+               "segment index '10' out of range (0..9, start or end)");
+  expect_error(with_load("{node: [1], force: [0, 0, 1]}"), "rods[0].loads[0].node",
+               "expected a node index, start or end");
+  expect_error(with_load("{node: middle, force: [0, 0, 1]}"), "rods[0].loads[0].node",
+               "expected a node index, start or end, got");
+  const Scene scene = parse_scene(
+      with_load("{node: end, force: [0, 0, 1]}\n      - {segment: end, torque: [1, 0, 0]}"));
+  const Rod& rod = scene.world.rods()[0];
+  ASSERT_EQ(rod.loads().size(), 2u);
+  EXPECT_EQ(rod.loads()[0].index, 10);
+  EXPECT_EQ(rod.loads()[1].index, 9);
+}
+
 TEST(SceneValidation, UnknownNames) {
   expect_error(
       replace(kBase, "material: {E: 3.0e7, G: 1.0e7, E_s: 5.0e9, rho: 2000}", "material: rubber"),
