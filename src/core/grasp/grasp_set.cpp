@@ -277,40 +277,37 @@ int GraspSet::before_step(World& world, double t, double h, const HolderLimits& 
     for (int k = 0; k < 2; ++k) g.x0[k] = rod.positions()[s + k];
     // A holder at rest with nothing turning leaves the drives as they are (their targets hold).
     if (!g.holder.moving() && g.twist_rate == 0.0 && !g.hold_pending) continue;
+    // Stalls at the material's strain limit (limits.stall_at_max_strain): a step whose motion
+    // would stretch the cable beyond it towards a held node is not taken.
     const double limit = rod.section().max_strain;
-    if (limits.stall_at_max_strain && limit > 0.0 && g.holder.moving()) {
-      const HolderMotion before = g.holder;
-      const Eigen::Isometry3d from = g.holder_pose();
-      const HolderClip c = g.holder.advance(t, h, limits);
-      const Overstretch o = overstretch(rod, g.grasp, from, g.holder_pose(), t + h, limit);
-      if (o.anchor >= 0) {
-        g.holder = before;  // the step's motion is not taken
-        g.holder.halt();
-        if (!g.stalled) {
-          g.stalled = g.stall_new = true;
-          g.stall_strain = o.strain;
-          g.stall_anchor = o.anchor;
-          g.stall_distance = o.distance;
-          ++stalls;
-        }
-      } else {
-        g.clip.speed |= c.speed;
-        g.clip.acceleration |= c.acceleration;
-        // The stall ends once the holder is nearer its anchor than where it stalled (creeping up
-        // to the limit from there is the same stall).
-        if (g.stalled) {
-          const NodeDrive* a = rod.node_drive(g.stall_anchor);
-          const int k = g.stall_anchor < s ? 0 : 1;
-          if (!a ||
-              (held_node(rod, g.grasp, g.holder_pose(), k) - drive_position(*a, t + h)).norm() <
-                  g.stall_distance)
-            g.stalled = false;
-        }
+    const bool check = limits.stall_at_max_strain && limit > 0.0 && g.holder.moving();
+    const HolderMotion before = g.holder;
+    const Eigen::Isometry3d from = g.holder_pose();
+    const HolderClip clip = g.holder.advance(t, h, limits);
+    const Overstretch o =
+        check ? overstretch(rod, g.grasp, from, g.holder_pose(), t + h, limit) : Overstretch{};
+    if (o.anchor >= 0) {
+      g.holder = before;
+      g.holder.halt();
+      if (!g.stalled) {
+        g.stalled = g.stall_new = true;
+        g.stall_strain = o.strain;
+        g.stall_anchor = o.anchor;
+        g.stall_distance = o.distance;
+        ++stalls;
       }
     } else {
-      const HolderClip c = g.holder.advance(t, h, limits);
-      g.clip.speed |= c.speed;
-      g.clip.acceleration |= c.acceleration;
+      g.clip.speed |= clip.speed;
+      g.clip.acceleration |= clip.acceleration;
+      // The stall ends once the holder is nearer its anchor than where it stalled (creeping up
+      // to the limit from there is the same stall).
+      if (check && g.stalled) {
+        const NodeDrive* a = rod.node_drive(g.stall_anchor);
+        const int k = g.stall_anchor < s ? 0 : 1;
+        if (!a || (held_node(rod, g.grasp, g.holder_pose(), k) - drive_position(*a, t + h)).norm() <
+                      g.stall_distance)
+          g.stalled = false;
+      }
     }
     if (g.twist_rate != 0.0)
       g.twist_angle = std::remainder(g.twist_angle + g.twist_rate * h, 2.0 * M_PI);
