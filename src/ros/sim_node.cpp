@@ -308,7 +308,8 @@ std::string SimNode::restart_guard() {
     note =
         "; the simulation had stopped (stability guard: " + stats_.last_problem + ") and resumes";
   report_guard_events();
-  sim_.restart_guard();  // snapshots the world, the grasps and the scripts
+  holder_warnings_.clear();  // a new world's first lag is news again
+  sim_.restart_guard();      // snapshots the world, the grasps and the scripts
   return note;
 }
 
@@ -406,14 +407,25 @@ int SimNode::benchmark_report(double wall, double cpu, unsigned long steps, doub
 }
 
 void SimNode::check_holders_and_strain() {
+  // One warning when a holder starts to lag (not one every few seconds while it lags); a holder
+  // that flickers in and out of its limits warns at most every kHolderWarnGap seconds.
+  constexpr double kHolderWarnGap = 5.0;
+  const double now = wall_seconds();
   for (const auto& kv : grasps_.grasps()) {
     const corde::GraspState& g = kv.second;
-    if (!g.clip.any()) continue;
-    ROS_WARN_THROTTLE(2.0,
-                      "corde_sim: grasp '%s': holder motion limited to %s (it lags its commanded "
-                      "pose; ~holder_max_speed %g m/s, ~holder_max_acceleration %g m/s^2)",
-                      kv.first.c_str(), g.clip.speed ? "the speed limit" : "the acceleration limit",
-                      params_.holder_max_speed, params_.holder_max_acceleration);
+    HolderWarning& w = holder_warnings_[kv.first];
+    if (!g.clip.any()) {
+      w.lagging = false;
+      continue;
+    }
+    if (!w.lagging && !(now - w.last_wall < kHolderWarnGap))
+      ROS_WARN(
+          "corde_sim: grasp '%s': holder motion limited to %s (it lags its commanded pose; "
+          "~holder_max_speed %g m/s, ~holder_max_acceleration %g m/s^2)",
+          kv.first.c_str(), g.clip.speed ? "the speed limit" : "the acceleration limit",
+          params_.holder_max_speed, params_.holder_max_acceleration);
+    if (!w.lagging) w.last_wall = now;
+    w.lagging = true;
     grasps_.find(kv.first)->clip = corde::HolderClip();
   }
   // strain_warning_ stays until the next diagnostics report (diagnose() clears it), so that a short

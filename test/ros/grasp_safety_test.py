@@ -106,6 +106,8 @@ class GraspSafety(unittest.TestCase):
         self.assert_all_valid(since, "far jump")
         for s in self.sim.state.messages(since):
             self.assertLess(np.linalg.norm(ct.vec(s.rods[0].velocities[N])), 2.0 * 1.01)
+        # ~4 s of lagging there and back: one warning, not one every few seconds.
+        self.assertEqual(len(self.log.lines(since, "holder motion limited")), 1)
 
     def test_5_streamed_offsets(self):
         # 5 cm offsets streamed as fast as python publishes (several kHz), then a 20 cm step

@@ -114,6 +114,11 @@ class SimNode {
   corde::StepGuard& guard_ = sim_.guard();
   std::map<std::string, GraspWiring> wiring_;
   bool layout_changed_ = false;  // a scripted grasp took hold or let go: refresh_layout() due
+  struct HolderWarning {
+    bool lagging = false;
+    double last_wall = -1e300;  // wall_seconds() of the last warning
+  };
+  std::map<std::string, HolderWarning> holder_warnings_;  // by grasp name
   // The one way in (command_queue.h); the loop applies it in drain_commands().
   CommandQueue commands_;
   std::atomic<bool> loop_running_{false};  // run() drains the queue: callers may wait on it
