@@ -105,7 +105,7 @@ void NodeOutputs::publish_tf() {
 }
 
 void NodeOutputs::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
-  if (!node_.sim_.paused() || node_.params_.tf_rate <= 0.0 ||
+  if (!node_.sim_.paused() || node_.params_.tf_rate <= 0.0 || !node_.clock_.ready() ||
       (node_.params_.publish_clock && node_.sim_time() <= 0.0))
     return;
   if (pub.getSubscriberName() == ros::this_node::getName()) return;

@@ -1,6 +1,6 @@
 """Helpers of the time rostests (time_*_test.py): a /clock the test controls, a recorder that
-keeps each message with the clock shown when it arrived, and a node started with its output in
-a file (a pipe would fill up and block it)."""
+keeps each message with the clock shown when it arrived, the check of stamps against that clock,
+and a node started with its output in a file (a pipe would fill up and block it)."""
 import os
 import signal
 import subprocess
@@ -81,6 +81,22 @@ class ClockRecorder:
         while time.monotonic() < end and len(self.since(since)) < count:
             time.sleep(0.02)
         return self.since(since)
+
+
+def check_behind(test, items, what, near, max_delay):
+    """(clock at arrival, message) pairs: each stamp at or behind the clock it arrived at, never
+    ahead; behind by less than `near` at the median and `max_delay` at most (a loaded machine may
+    delay a message's delivery). Prints the median and the largest."""
+    for clock, m in items:
+        stamp = m.header.stamp.to_sec()
+        test.assertLessEqual(stamp, clock + 1e-6, "%s: stamp %.6f ahead of %.6f" %
+                             (what, stamp, clock))
+    lags = sorted(clock - m.header.stamp.to_sec() for clock, m in items)
+    median = lags[len(lags) // 2]
+    print("%s: stamp behind the clock at arrival: median %.4f s, max %.4f s" %
+          (what, median, lags[-1]))
+    test.assertLess(median, near, "%s: stamps behind the clock" % what)
+    test.assertLess(lags[-1], max_delay, "%s: stamps behind the clock" % what)
 
 
 class Node:

@@ -15,8 +15,10 @@ import time_clock as tc
 from corde_sim.msg import WorldState
 
 # A state is published after its batch, within a loop period and an output's work: its stamp
-# is this close to the ROS time it arrives at (a loaded machine's delivery included).
-NEAR = 0.1  # s
+# is this close behind the ROS time it arrives at, at the median, never ahead; a loaded machine
+# may delay a message's delivery up to MAX_DELAY.
+NEAR = 0.05  # s
+MAX_DELAY = 0.5  # s
 
 
 def ros_now():
@@ -34,13 +36,8 @@ class TimeWall(unittest.TestCase):
         for r in (cls.slow, cls.fast):
             assert r.wait(1, ct.WAIT), "no rod_state within %g s" % ct.WAIT
 
-    def check_at_ros_time(self, items):
-        for received, m in items:
-            stamp = m.header.stamp.to_sec()
-            self.assertLessEqual(stamp, received, "stamp %.6f in the future of %.6f" %
-                                 (stamp, received))
-            self.assertLess(received - stamp, NEAR, "stamp %.6f behind ROS time %.6f" %
-                            (stamp, received))
+    def check_at_ros_time(self, items, what):
+        tc.check_behind(self, items, what, NEAR, MAX_DELAY)
 
     def test_backlog_dropped_stamps_stay_at_ros_time(self):
         time.sleep(1.0)
@@ -50,8 +47,10 @@ class TimeWall(unittest.TestCase):
         self.assertGreater(len(items), 20)
         # It really is behind: simulation time runs far slower than ROS time.
         (r0, m0), (r1, m1) = items[0], items[-1]
+        print("behind: simulation time per ROS second %.3f" % ((m1.sim_time - m0.sim_time) /
+                                                             (r1 - r0)))
         self.assertLess((m1.sim_time - m0.sim_time) / (r1 - r0), 0.7)
-        self.check_at_ros_time(items)
+        self.check_at_ros_time(items, "behind")
         said = [s.message for a in self.diagnostics.messages(since) for s in a.status
                 if "backlog dropped" in s.message]
         self.assertTrue(said, "the diagnostics do not say that the node cannot keep up")
@@ -63,14 +62,14 @@ class TimeWall(unittest.TestCase):
         self.assertGreater(len(items), 20)
         (r0, m0), (r1, m1) = items[0], items[-1]
         self.assertGreater((m1.sim_time - m0.sim_time) / (r1 - r0), 1.5)  # faster than real time
-        self.check_at_ros_time(items)
+        self.check_at_ros_time(items, "factor 0")
         r = self.fast_sim.reset()
         self.assertTrue(r.success, r.message)
         since = time.monotonic()
         time.sleep(1.0)
         items = self.fast.since(since)
         self.assertGreater(len(items), 10)
-        self.check_at_ros_time(items)
+        self.check_at_ros_time(items, "factor 0 after ~reset")
 
 
 if __name__ == "__main__":
