@@ -5,8 +5,9 @@
 //    time; steps paced on the steady wall clock by the real-time factor (0: as fast as possible).
 //  - kExternalClock (/use_sim_time true, ~publish_clock false): another node's /clock paces the
 //    steps one to one (the real-time factor is not used); nothing runs before a nonzero /clock;
-//    a state is never stamped ahead of the clock (but a state changed by a service or ~step
-//    while the clock stands still: one step or the ~step's steps, so that stamps keep moving on);
+//    a state is never stamped ahead of the clock, but for a state changed by a service (one step
+//    after the previous one) or ~step's steps while the clock stands still (so that a changed
+//    state always gets a later stamp);
 //    a clock going back (a bag looping) or leaping forward (more than kJumpSeconds at once)
 //    re-anchors the mapping instead of running the gap.
 //  - kWall (default): steps paced on the steady wall clock by the real-time factor; a state is
