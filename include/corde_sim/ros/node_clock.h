@@ -8,7 +8,8 @@
 //    a state is never stamped ahead of the clock, but for a state changed by a service (one step
 //    after the previous one) or ~step's steps while the clock stands still (so that a changed
 //    state always gets a later stamp);
-//    a clock going back (a bag looping) or leaping forward (more than kJumpSeconds at once)
+//    a clock going back (a bag looping) or leaping forward (more than kJumpSeconds beyond the
+//    wall time since it was last observed)
 //    re-anchors the mapping instead of running the gap.
 //  - kWall (default): steps paced on the steady wall clock by the real-time factor; a state is
 //    stamped with the ROS (wall) time at which it was due. When the node drops a backlog, runs
@@ -32,7 +33,9 @@ enum class TimeSource { kPublishClock, kExternalClock, kWall };
 
 class NodeClock {
  public:
-  // A /clock moving forward by more than this at once (s) is a jump, not a backlog to catch up.
+  // A /clock moving forward by more than this (s) beyond the wall time elapsed since the last
+  // observe() is a jump, not a backlog to catch up (a stalled loop's clock moved as much as the
+  // wall time).
   static constexpr double kJumpSeconds = 1.0;
   // A /clock moving back by more than this (s) is a jump back (small reorderings are ignored).
   static constexpr double kBackTolerance = 1e-3;
@@ -95,6 +98,7 @@ class NodeClock {
   double sim_anchor_ = 0.0;
   std::int64_t ros_anchor_ns_ = 0;
   std::int64_t last_ros_ns_ = 0;  // the last ROS time observe() saw
+  double last_wall_ = 0.0;        // and the wall time then
   double measured_rate_ = 1.0;
   double last_jump_ = 0.0;
   int jumps_ = 0;
@@ -108,6 +112,7 @@ inline void NodeClock::start(TimeSource source, double factor, double sim, doubl
   factor_ = factor;
   ready_ = source != TimeSource::kExternalClock || ros_ns > 0;
   last_ros_ns_ = ros_ns;
+  last_wall_ = wall;
   pacer_.reset(source == TimeSource::kExternalClock ? 1.0 : factor, sim, wall);
   sim_anchor_ = sim;
   ros_anchor_ns_ = source == TimeSource::kPublishClock ? 0 : ros_ns;
@@ -126,15 +131,18 @@ inline NodeClock::Event NodeClock::observe(double sim, double wall, std::int64_t
     if (ros_ns <= 0) return Event::kNone;
     ready_ = true;
     last_ros_ns_ = ros_ns;
+    last_wall_ = wall;
     sim_anchor_ = sim;
     ros_anchor_ns_ = ros_ns;
     pacer_.anchor(sim, wall);
     return Event::kStarted;
   }
   const double moved = 1e-9 * static_cast<double>(ros_ns - last_ros_ns_);
+  const double elapsed = wall - last_wall_;
   if (moved < -kBackTolerance) {
     // Back (a bag played in a loop, a restarted clock): the state is stamped at the new time.
     last_ros_ns_ = ros_ns;
+    last_wall_ = wall;
     sim_anchor_ = sim;
     ros_anchor_ns_ = ros_ns;
     pacer_.anchor(sim, wall);
@@ -144,7 +152,8 @@ inline NodeClock::Event NodeClock::observe(double sim, double wall, std::int64_t
   }
   if (moved < 0.0) return Event::kNone;  // a small reordering: wait for the clock to pass it
   last_ros_ns_ = ros_ns;
-  if (moved > kJumpSeconds) {
+  last_wall_ = wall;
+  if (moved - elapsed > kJumpSeconds) {
     anchor(sim, wall, ros_ns);
     last_jump_ = moved;
     ++jumps_;

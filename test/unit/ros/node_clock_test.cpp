@@ -85,8 +85,12 @@ TEST(NodeClock, ExternalClockJumpsReanchor) {
   EXPECT_EQ(c.jumps(), 2);
   EXPECT_EQ(c.steps_due(sim, 0.0, fwd, kH), 0);
   EXPECT_EQ(c.stamp_ns(sim), fwd);
+  // A loop stalled for 3 s of wall time while the clock ran on: no jump, the steps are due.
+  EXPECT_EQ(c.observe(sim, 3.0, fwd + 3 * kSec), NodeClock::Event::kNone);
+  EXPECT_EQ(c.steps_due(sim, 3.0, fwd + 3 * kSec, kH), 3000);
+  EXPECT_EQ(c.jumps(), 2);
   // A small reordering (a late clock message) is no jump and steps nothing.
-  EXPECT_EQ(c.observe(sim, 0.0, fwd - kSec / 10000), NodeClock::Event::kNone);
+  EXPECT_EQ(c.observe(sim, 3.0, fwd + 3 * kSec - kSec / 10000), NodeClock::Event::kNone);
   EXPECT_EQ(c.jumps(), 2);
 }
 
