@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
@@ -196,11 +197,8 @@ std::string NodeInputs::check_workspace(const Eigen::Vector3d& p) const {
 }
 
 double NodeInputs::ros_to_sim_interval(double ros_seconds) const {
-  // Input stamps are ROS time: simulation time itself when this node publishes /clock, wall
-  // time otherwise, which the simulation follows at the real-time factor.
-  double d = ros_seconds;
-  if (!node_.params_.publish_clock)
-    d *= node_.pacer_.paced() ? node_.pacer_.factor() : std::max(node_.stats_.measured_rtf, 1.0);
+  // Input stamps are ROS time; the time model says how much simulation time it stands for.
+  const double d = node_.clock_.sim_interval(ros_seconds);
   return std::min(std::max(d, 0.0), node_.params_.max_pose_age);
 }
 
@@ -399,8 +397,8 @@ void NodeInputs::apply_input(const InputEvent& e) {
 void NodeInputs::apply_reconfigure(const NodeConfig& c) {
   if (c.real_time_factor != node_.params_.real_time_factor) {
     node_.params_.real_time_factor = c.real_time_factor;
-    node_.pacer_.reset(c.real_time_factor, node_.sim_time(),
-                       wall_seconds());  // no backlog, no jump
+    node_.clock_.set_factor(c.real_time_factor, node_.sim_time(), wall_seconds(),
+                            static_cast<std::int64_t>(ros::Time::now().toNSec()));
   }
   node_.params_.tf_rate = c.tf_rate;
   node_.params_.marker_rate = c.marker_rate;

@@ -7,6 +7,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 
@@ -104,7 +105,7 @@ void NodeOutputs::publish_tf() {
 }
 
 void NodeOutputs::send_tf_to(const ros::SingleSubscriberPublisher& pub) {
-  if (!node_.sim_.paused() || node_.params_.tf_rate <= 0.0 ||
+  if (!node_.sim_.paused() || node_.params_.tf_rate <= 0.0 || !node_.clock_.ready() ||
       (node_.params_.publish_clock && node_.sim_time() <= 0.0))
     return;
   if (pub.getSubscriberName() == ros::this_node::getName()) return;
@@ -215,7 +216,14 @@ void NodeOutputs::publish_due(double now) {
 void NodeOutputs::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   using diagnostic_msgs::DiagnosticStatus;
   const double target = node_.params_.real_time_factor;
-  if (node_.guard_.failed()) {
+  const NodeClock& clock = node_.clock_;
+  const bool external = clock.source() == TimeSource::kExternalClock;
+  NodeStats& stats = node_.stats_;
+  if (!clock.ready()) {
+    stat.summary(DiagnosticStatus::WARN,
+                 "waiting for /clock: /use_sim_time is true and ~publish_clock false, and no "
+                 "node has published a nonzero time yet");
+  } else if (node_.guard_.failed()) {
     stat.summaryf(DiagnosticStatus::ERROR,
                   "stopped at the last good state: the stability guard could not recover (%s); "
                   "~reset or ~configure to resume",
@@ -232,16 +240,36 @@ void NodeOutputs::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
     node_.stats_.strain_warning.clear();
   } else if (!deep_contact_warning_.empty()) {
     stat.summary(DiagnosticStatus::WARN, deep_contact_warning_);
+  } else if (!stats.clock_note.empty()) {
+    stat.summary(DiagnosticStatus::WARN, stats.clock_note);
   } else if (node_.stats_.stability_margin > 1.0) {
     stat.summaryf(DiagnosticStatus::WARN, "time step above the stability estimate (h/h_crit %.2f)",
                   node_.stats_.stability_margin);
-  } else if (!node_.sim_.paused() && target > 0.0 && node_.stats_.lagging) {
-    stat.summaryf(DiagnosticStatus::WARN, "slower than real_time_factor %.3g (measured %.3g)",
-                  target, node_.stats_.measured_rtf);
+  } else if (clock.paced() && stats.backlog_drops > stats.backlog_drops_reported) {
+    if (external)
+      stat.summaryf(DiagnosticStatus::WARN,
+                    "slower than /clock (measured real-time factor %.3g): backlog dropped, "
+                    "stamps re-anchored to /clock",
+                    stats.measured_rtf);
+    else
+      stat.summaryf(DiagnosticStatus::WARN,
+                    "slower than real_time_factor %.3g (measured %.3g): backlog dropped, stamps "
+                    "re-anchored to ROS time",
+                    target, stats.measured_rtf);
   } else {
     stat.summary(DiagnosticStatus::OK, node_.sim_.paused() ? "paused" : "running");
   }
+  stats.clock_note.clear();
+  stats.backlog_drops_reported = stats.backlog_drops;
   stat.add("simulation time (s)", node_.sim_time());
+  stat.add("time source", clock.source() == TimeSource::kPublishClock ? "this node's /clock"
+                          : external                                  ? "another node's /clock"
+                                                                      : "wall time");
+  if (clock.ready())
+    stat.add("stamp behind ROS time (s)",
+             clock.lag(node_.sim_time(), static_cast<std::int64_t>(ros::Time::now().toNSec())));
+  stat.add("backlogs dropped (stamps re-anchored)", stats.backlog_drops);
+  stat.add("/clock jumps (re-anchored)", clock.jumps());
   stat.add("steps", node_.stats_.steps_total);
   stat.add("integrator", corde::integrator_name(node_.world_.integrator));
   stat.add("time step (s)", node_.world_.time_step);

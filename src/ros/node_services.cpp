@@ -236,8 +236,7 @@ void NodeServices::reset(Reset::Request& req, Reset::Response& res) {
           return;
         }
         node_.time_offset_ = t;
-        node_.bump_time();
-        node_.pacer_.anchor(node_.sim_time(), wall_seconds());
+        node_.bump_time();  // (stamped now: stamps back in step with ROS time)
         res.success = true;
         res.message = "reset to '" + clip(path) + "' at t = " + num(node_.sim_time()) + " s" +
                       node_.scene_.take_guard_note();
@@ -358,7 +357,7 @@ void NodeServices::pause(std_srvs::SetBool::Request& req, std_srvs::SetBool::Res
   if (node_.sim_.paused() != static_cast<bool>(req.data)) {
     node_.sim_.set_paused(req.data);  // resuming drops the queued steps
     if (!node_.sim_.paused())
-      node_.pacer_.anchor(node_.sim_time(), wall_seconds());  // no backlog from the pause
+      node_.anchor_clock();  // no backlog from the pause, stamped from now on
   }
   res.success = true;
   res.message = std::string(node_.sim_.paused() ? "paused" : "running") +

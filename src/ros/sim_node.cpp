@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 
@@ -34,6 +35,14 @@ double thread_cpu_seconds() {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+// ROS time now in nanoseconds (0 while an external /clock has shown nothing yet).
+std::int64_t ros_now_ns() { return static_cast<std::int64_t>(ros::Time::now().toNSec()); }
+
+TimeSource time_source(bool publish_clock, bool use_sim_time) {
+  if (publish_clock) return TimeSource::kPublishClock;
+  return use_sim_time ? TimeSource::kExternalClock : TimeSource::kWall;
+}
+
 }  // namespace
 
 SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh), pnh_(pnh) {
@@ -48,10 +57,9 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
         "/use_sim_time true before any node starts (e.g. <param name=\"use_sim_time\" "
         "value=\"true\"/> in the launch file)");
   if (!params_.publish_clock && use_sim_time)
-    ROS_WARN(
-        "corde_sim: /use_sim_time is true but ~publish_clock is false: expecting another "
-        "node to publish /clock; stamps are that clock's time at start-up plus simulation "
-        "time");
+    ROS_INFO(
+        "corde_sim: /use_sim_time is true and ~publish_clock false: following another node's "
+        "/clock (the simulation waits for it, steps with it and pauses when it stops)");
 
   // The holder limits are the driver's configuration: kept across scene installs and rollbacks,
   // changed by dynamic_reconfigure only (apply_reconfigure).
@@ -116,7 +124,8 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
 
   outputs_.start_diagnostics();
 
-  epoch_ = params_.publish_clock ? ros::Time(0) : ros::Time::now();
+  clock_.start(time_source(params_.publish_clock, use_sim_time), params_.real_time_factor,
+               sim_time(), wall_seconds(), ros_now_ns());
   sim_.set_paused(params_.start_paused);
   // Two threads: a ~reset reading a long scene file does not hold a ~pause or ~list_grasps.
   services_.start(2);
@@ -151,15 +160,41 @@ void SimNode::drain_commands() {
 }
 
 ros::Time SimNode::stamp() const {
-  // With /clock from this node the stamp is the simulation time itself; otherwise the ROS time
-  // at start-up plus simulation time, so each message still names the instant it shows.
-  return params_.publish_clock ? ros::Time(sim_time()) : epoch_ + ros::Duration(sim_time());
+  ros::Time t;
+  t.fromNSec(static_cast<uint64_t>(std::max<std::int64_t>(clock_.stamp_ns(sim_time()), 0)));
+  return t;
 }
 
 void SimNode::bump_time() {
   // A changed state (reset, configure, grasp) gets a later stamp than anything published before,
   // so tf listeners never see two different poses at one stamp.
   time_offset_ += world_.time_step;
+  anchor_clock();
+}
+
+void SimNode::anchor_clock() { clock_.anchor(sim_time(), wall_seconds(), ros_now_ns()); }
+
+void SimNode::observe_clock(double now) {
+  const bool was_ready = clock_.ready();
+  const NodeClock::Event e = clock_.observe(sim_time(), now, ros_now_ns());
+  if (!clock_.ready() && !waiting_logged_) {
+    ROS_INFO("corde_sim: waiting for a nonzero /clock (/use_sim_time is true)");
+    waiting_logged_ = true;
+  }
+  if (e == NodeClock::Event::kStarted && !was_ready)
+    ROS_INFO("corde_sim: /clock at %.6f s: simulation time %.6f s starts there",
+             ros::Time::now().toSec(), sim_time());
+  if (e == NodeClock::Event::kJumpedBack || e == NodeClock::Event::kJumpedForward) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "/clock jumped %s by %.6g s (to %.6f s): stamps re-anchored there, the "
+                  "simulation goes on from its state (t = %.6f s)%s",
+                  e == NodeClock::Event::kJumpedBack ? "back" : "forward",
+                  std::abs(clock_.last_jump()), ros::Time::now().toSec(), sim_time(),
+                  e == NodeClock::Event::kJumpedForward ? " instead of running the gap" : "");
+    stats_.clock_note = text;
+    ROS_WARN("corde_sim: %s", text);
+  }
 }
 
 long SimNode::run_steps(long n, double deadline) {
@@ -192,26 +227,31 @@ void SimNode::advance(double now) {
   if (guard_.failed()) {
     // Stopped at the last good state: the clock goes on (tf and /clock listeners see the state
     // held, not a frozen time) and the state is published as it is until a reset or configure.
-    const long due = pacer_.paced() ? pacer_.steps_due(sim_time(), now, world_.time_step) : 1;
+    const long due =
+        clock_.paced() ? clock_.steps_due(sim_time(), now, ros_now_ns(), world_.time_step) : 1;
     time_offset_ += static_cast<double>(std::max(0L, due)) * world_.time_step;
+    if (!clock_.paced()) anchor_clock();
     return;
   }
-  if (pacer_.paced()) {
-    const long due = pacer_.steps_due(sim_time(), now, world_.time_step);
+  if (clock_.paced()) {
+    const long due = clock_.steps_due(sim_time(), now, ros_now_ns(), world_.time_step);
     // The steps due may take a few loop periods (from when they were first due); beyond that the
     // simulation cannot keep up, and the backlog is dropped instead of growing (the measured
     // real-time factor shows it). A batch also stops at the next output and goes on after it, so
     // that no output waits for more than one step.
     const double budget = std::max(3.0 / params_.loop_rate, 0.02);
-    const double budget_end = (pacer_.behind_since() < 0.0 ? now : pacer_.behind_since()) + budget;
+    const double budget_end = (clock_.behind_since() < 0.0 ? now : clock_.behind_since()) + budget;
     const double end = std::max(std::min(budget_end, outputs_.schedule().next_due()), now);
     const long done = due > 0 ? run_steps(due, end) : 0;
     const bool behind = done < due && !guard_.failed();
     stats_.lagging = behind && wall_seconds() >= budget_end;
-    if (stats_.lagging)
-      pacer_.anchor(sim_time(), wall_seconds());
-    else
-      pacer_.set_behind(behind, now);
+    if (stats_.lagging) {
+      // The backlog is dropped, and the state is stamped now: stamps do not drift behind.
+      anchor_clock();
+      ++stats_.backlog_drops;
+    } else {
+      clock_.set_behind(behind, now);
+    }
   } else {
     // As fast as possible, in slices short enough to serve callbacks and outputs on time.
     const double slice_end = std::min(now + 0.005, outputs_.schedule().next_due());
@@ -219,6 +259,11 @@ void SimNode::advance(double now) {
   }
   if (settle_guard()) check_holders_and_strain();
   refresh_if_grasps_changed();  // (the guard may have replayed a scripted grasp or release)
+  if (!clock_.paced()) {
+    // Unpaced: the state is stamped when it was computed, never ahead of ROS time.
+    clock_.set_measured_rate(stats_.measured_rtf);
+    anchor_clock();
+  }
 }
 
 void SimNode::run_queued_steps(double now) {
@@ -230,6 +275,7 @@ void SimNode::run_queued_steps(double now) {
   const double budget = std::max(3.0 / params_.loop_rate, 0.02);
   const double end = std::max(std::min(now + budget, outputs_.schedule().next_due()), now);
   run_steps(sim_.queued_steps(), end);  // (each step takes one of the driver's queued steps)
+  anchor_clock();  // ~step's states are stamped when computed (never ahead of ROS time)
   if (settle_guard()) {
     check_holders_and_strain();
   } else {
@@ -316,7 +362,8 @@ std::string SimNode::restart_guard() {
 int SimNode::run() {
   ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
   double now = wall_seconds();
-  pacer_.reset(params_.real_time_factor, sim_time(), now);
+  // (Pacing starts here, not at construction: no backlog from the set-up.)
+  clock_.start(clock_.source(), params_.real_time_factor, sim_time(), now, ros_now_ns());
   outputs_.schedule().set_rate(OutputSchedule::kTf, params_.tf_rate);
   outputs_.schedule().set_rate(OutputSchedule::kMarkers, params_.marker_rate);
   outputs_.schedule().set_rate(OutputSchedule::kState,
@@ -339,13 +386,15 @@ int SimNode::run() {
     inputs_.update_robot();
     drain_commands();
     now = wall_seconds();
-    if (!sim_.paused())
+    observe_clock(now);
+    // (Before an external /clock has started, nothing runs and nothing is stamped.)
+    if (clock_.ready() && !sim_.paused())
       advance(now);
-    else if (sim_.queued_steps() > 0)
+    else if (clock_.ready() && sim_.queued_steps() > 0)
       run_queued_steps(now);
     now = wall_seconds();
     if (services_.step_call_waiting()) services_.answer_step_call(now);
-    outputs_.publish_due(now);
+    if (clock_.ready()) outputs_.publish_due(now);
     outputs_.update_diagnostics(now);
     const double out_wall = wall_seconds() - now;
     output_wall_total += out_wall;
@@ -357,7 +406,7 @@ int SimNode::run() {
     else if (sim_.paused())
       wake = std::min(outputs_.schedule().next_due(),
                       now + 0.05);  // rod_state keeps its rate while paused
-    else if (pacer_.paced() && pacer_.behind_since() < 0.0)  // (steps still due: no sleep)
+    else if (clock_.paced() && clock_.behind_since() < 0.0)  // (steps still due: no sleep)
       wake = std::min(outputs_.schedule().next_due(), now + 1.0 / params_.loop_rate);
     if (wake > now) queue->callAvailable(ros::WallDuration(wake - now));
   }

@@ -50,12 +50,13 @@ class ScriptedGrasp(unittest.TestCase):
         self.assertTrue(s0.paused)
         self.assertLess(s0.sim_time, 1e-9)
         p0, r0 = ct.segment_pose(s0.rods[0], N - 1)
-        # Stamps are the ROS time at start-up plus simulation time.
-        epoch = s0.header.stamp.to_sec() - s0.sim_time
         self.sim.tf.clear()
         self.assertTrue(self.sim.pause(False).success)
         s = self.sim.state_after(RUN_UNTIL)
         self.assertIsNotNone(s, "simulation time did not reach %g s" % RUN_UNTIL)
+        # Stamps are the ROS time at which a state was due: since the resume, that ROS time plus
+        # simulation time.
+        epoch = s.header.stamp.to_sec() - s.sim_time
         frames = ct.frames_in(self.sim.tf.messages(), "grasp/gripper")
         timed = [(t.header.stamp.to_sec() - epoch, ct.transform_pose(t.transform)) for t in frames]
         lift = [g for (t, g) in timed if LIFT_WINDOW[0] <= t <= LIFT_WINDOW[1]]

@@ -16,6 +16,9 @@ struct NodeStats {
   double sim_at_stats = 0.0, wall_at_stats = 0.0;
   double step_time_us = 0.0, measured_rtf = 0.0;
   bool lagging = false, rtf_initialised = false;
+  // The time model: backlogs dropped (stamps re-anchored), the last /clock jump (for one report).
+  long backlog_drops = 0, backlog_drops_reported = 0;
+  std::string clock_note;
   // The stability guard: detections (all recovered or not), and its last event.
   int recoveries = 0, recoveries_reported = 0;
   std::string last_problem;

@@ -3,8 +3,8 @@
 //
 // Every input reaches the simulation as a command of the node's one queue (command_queue.h, which
 // states the threading model): only the loop thread applies them, between batches of steps, so
-// nothing in the library is touched concurrently. The loop is paced on the steady wall clock,
-// never on ROS time, so it also works when the node itself publishes /clock.
+// nothing in the library is touched concurrently. The time model (the three time sources, the
+// pacing and the mapping between simulation time and ROS time) is NodeClock (node_clock.h).
 //
 // SimNode holds the simulation driver and the loop (inputs, steps, outputs); its parts, each in
 // its own file: NodeInputs (topics, tf, reconfigure), SceneInstall (scene, robot, grasps made),
@@ -23,12 +23,12 @@
 #include "corde_sim/grasp/grasp_set.h"
 #include "corde_sim/ros/command_queue.h"
 #include "corde_sim/ros/configure.h"
+#include "corde_sim/ros/node_clock.h"
 #include "corde_sim/ros/node_inputs.h"
 #include "corde_sim/ros/node_outputs.h"
 #include "corde_sim/ros/node_params.h"
 #include "corde_sim/ros/node_services.h"
 #include "corde_sim/ros/node_stats.h"
-#include "corde_sim/ros/pacer.h"
 #include "corde_sim/ros/scene_install.h"
 #include "corde_sim/simulation/simulation.h"
 #include "corde_sim/stability/step_guard.h"
@@ -70,6 +70,9 @@ class SimNode {
   // (steady-clock seconds). Public for the benchmark and tests of the adapter.
   long run_steps(long n, double deadline);
   double sim_time() const { return time_offset_ + world_.time(); }
+  // The time model: stamps (stamp() below) and its inverse, clock().sim_time_at(ros seconds),
+  // the simulation time an input's header stamp stands for.
+  const NodeClock& clock() const { return clock_; }
   const corde::World& world() const { return world_; }
 
  private:
@@ -97,9 +100,15 @@ class SimNode {
   // A new world (start-up, reset, configure): the guard starts over from it. Returns what to add
   // to the service's message when the guard had given up before ("" otherwise).
   std::string restart_guard();
-  // A changed state (reset, configure, grasp) gets a later stamp than anything published before.
+  // A changed state (reset, configure, grasp) gets a later stamp than anything published before,
+  // and is stamped at the ROS time of the change (NodeClock::anchor).
   void bump_time();
+  // The current state's stamp: the ROS time of simulation time sim_time() (NodeClock::stamp_ns).
   ros::Time stamp() const;
+  // The clock's view of an external /clock before the steps: its start, its jumps (logged).
+  void observe_clock(double now);
+  // The state is stamped at the current ROS time from now on (NodeClock::anchor).
+  void anchor_clock();
   int benchmark_report(double wall, double cpu, unsigned long steps, double sim, double step_cpu);
 
   ros::NodeHandle nh_, pnh_;
@@ -123,9 +132,9 @@ class SimNode {
   CommandQueue commands_;
   std::atomic<bool> loop_running_{false};  // run() drains the queue: callers may wait on it
   SimSettings settings_;
-  double time_offset_ = 0.0;  // node simulation time = time_offset_ + world_.time()
-  ros::Time epoch_;           // ROS time of simulation time 0 when not publishing /clock
-  Pacer pacer_;
+  double time_offset_ = 0.0;     // node simulation time = time_offset_ + world_.time()
+  NodeClock clock_;              // pacing and stamps (node_clock.h)
+  bool waiting_logged_ = false;  // "waiting for /clock" said once
   NodeStats stats_;
 
   // The parts (after what they use).
