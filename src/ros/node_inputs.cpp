@@ -428,6 +428,35 @@ void NodeInputs::apply_reconfigure(const NodeConfig& c) {
       c.show_frames ? " with frames" : "", c.holder_max_speed, c.holder_max_acceleration);
 }
 
+void NodeInputs::wait_for_robot(double timeout) {
+  RobotObstacles& robot = node_.scene_.robot();
+  if (robot.empty()) return;
+  const double end = wall_seconds() + timeout;
+  bool said = false;
+  while (ros::ok()) {
+    update_robot();
+    const std::string missing = robot.unseen_links();
+    if (missing.empty()) {
+      if (said) ROS_INFO("corde_sim: the robot's links are in tf: starting");
+      return;
+    }
+    if (wall_seconds() >= end) {
+      ROS_WARN(
+          "corde_sim: starting without the robot's links %s: not in tf after "
+          "~robot_start_timeout (%g s); they collide from when they appear",
+          missing.c_str(), timeout);
+      return;
+    }
+    if (!said)
+      ROS_INFO(
+          "corde_sim: waiting for the robot's links in tf before the first step (up to "
+          "~robot_start_timeout, %g s): %s",
+          timeout, missing.c_str());
+    said = true;
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.02));
+  }
+}
+
 void NodeInputs::update_robot() {
   RobotObstacles& robot = node_.scene_.robot();
   if (robot.empty()) return;

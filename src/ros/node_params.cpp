@@ -292,6 +292,9 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   check_frame("robot_frame_prefix", p.robot_frame_prefix, true);
   p.robot_max_speed = read_positive(pnh, "robot_max_speed", 5.0, "m/s");
   p.robot_max_angular_speed = read_positive(pnh, "robot_max_angular_speed", 30.0, "rad/s");
+  read(pnh, "robot_start_timeout", p.robot_start_timeout, 10.0);
+  if (!(p.robot_start_timeout >= 0.0 && p.robot_start_timeout <= 3600.0))
+    bad("robot_start_timeout", "must be a time in [0, 3600] s, got " + num(p.robot_start_timeout));
   read(pnh, "contact_markers", p.contact_markers, false);
   p.contact_force_scale = read_positive(pnh, "contact_force_scale", 0.05, "m/N");
 

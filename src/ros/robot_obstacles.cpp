@@ -43,6 +43,13 @@ void RobotObstacles::load(const std::string& xml, const std::string& base_dir,
   }
 }
 
+std::string RobotObstacles::unseen_links() const {
+  std::string list;
+  for (const Link& link : links_)
+    if (!link.seen && !link.elements.empty()) list += (list.empty() ? "" : ", ") + link.name;
+  return list;
+}
+
 int RobotObstacles::active() const {
   return static_cast<int>(std::count_if(elements_.begin(), elements_.end(),
                                         [](const Element& e) { return e.index >= 0; }));

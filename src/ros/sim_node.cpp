@@ -361,6 +361,7 @@ std::string SimNode::restart_guard() {
 
 int SimNode::run() {
   ros::CallbackQueue* queue = ros::getGlobalCallbackQueue();
+  inputs_.wait_for_robot(params_.robot_start_timeout);
   double now = wall_seconds();
   // (Pacing starts here, not at construction: no backlog from the set-up.)
   clock_.start(clock_.source(), params_.real_time_factor, sim_time(), now, ros_now_ns());

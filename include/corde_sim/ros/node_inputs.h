@@ -40,6 +40,10 @@ class NodeInputs {
   // (loop) Queues the latest pose of each tf grasp's frame, and poses the robot's links.
   void update_tf_holders();
   void update_robot();
+  // (start-up) Serves tf until every robot link with collision elements has a pose, or for
+  // `timeout` s: a cable resting on a robot's table must not fall through it before the table
+  // is in tf. Warns, naming the links, when they do not come.
+  void wait_for_robot(double timeout);
   // (loop) A grasp input, checked against its grasp (held, stamp order, tf source), becomes a
   // command of the driver at the current world time (corde::Simulation::submit).
   void apply_input(const InputEvent& e);

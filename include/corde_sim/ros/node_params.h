@@ -74,6 +74,7 @@ struct NodeParams {
   std::vector<std::string> robot_ignore_links;
   std::string robot_frame_prefix;                                // tf frame of link L: prefix + L
   double robot_max_speed = 5.0, robot_max_angular_speed = 30.0;  // m/s, rad/s
+  double robot_start_timeout = 10.0;  // s (wall): start-up waits this long for the links in tf
   // Contacts in rviz: points and forces (N drawn as contact_force_scale m per N).
   bool contact_markers = false;
   double contact_force_scale = 0.05;  // m/N

@@ -27,6 +27,8 @@ class RobotObstacles {
   void load(const std::string& xml, const std::string& base_dir, const std::string& doc,
             double friction, const std::vector<std::string>& ignore);
   bool empty() const { return elements_.empty(); }
+  // The links with collision elements whose pose has not arrived yet, comma-separated.
+  std::string unseen_links() const;
   std::vector<Link>& links() { return links_; }
   const std::vector<Link>& links() const { return links_; }
   int elements() const { return static_cast<int>(elements_.size()); }
