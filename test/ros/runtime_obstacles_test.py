@@ -17,6 +17,7 @@ import rostest
 import tf2_ros
 from geometry_msgs.msg import Point, Pose, TransformStamped
 from shape_msgs.msg import Mesh, MeshTriangle, Plane, SolidPrimitive
+from visualization_msgs.msg import Marker, MarkerArray
 
 import corde_rostest as ct
 from corde_sim.srv import AddObstacle, ListObstacles, RemoveObstacle
@@ -52,6 +53,7 @@ class RuntimeObstacles(unittest.TestCase):
         cls.remove_srv = cls.sim.service("remove_obstacle", RemoveObstacle)
         cls.list_srv = cls.sim.service("list_obstacles", ListObstacles)
         cls.tf_static = tf2_ros.StaticTransformBroadcaster()
+        cls.markers = ct.Recorder("/markers", MarkerArray, queue_size=50)
 
     def add(self, name, primitive=None, pose=None, frame="", mesh=None, plane=None,
             friction=0.5, replace=False):
@@ -118,6 +120,12 @@ class RuntimeObstacles(unittest.TestCase):
         dup = self.add("block", box((0.6, 0.2, 0.1)), box_pose(z=0.4))
         self.assertFalse(dup.success)
         self.assertIn("was added already", dup.message)
+        # Drawn like the scene's obstacles (namespace obstacles, a grey cube at its pose).
+        def drawn(m):
+            return [k for k in m.markers if k.ns == "obstacles" and k.type == Marker.CUBE and
+                    abs(k.pose.position.z - 0.4) < 1e-9 and abs(k.scale.x - 0.6) < 1e-9]
+        self.assertTrue(self.markers.wait(1, since=time.monotonic(), pred=drawn),
+                        "the added box is not among the markers")
         s = self.step(4000)  # 1 s
         z = heights(s)
         self.assertLess(np.max(np.abs(z - (0.45 + R))), 1e-3, "rope not lying on the box: %s" % z)
@@ -169,6 +177,15 @@ class RuntimeObstacles(unittest.TestCase):
         self.assertEqual(self.listed()["shelf"][0], "world")
         self.assertAlmostEqual(self.listed()["shelf"][2].position.z, -1.0, places=9)
 
+    def test_5_kept_through_reset(self):
+        r = self.sim.reset()
+        self.assertTrue(r.success, r.message)
+        self.assertEqual(list(self.listed()), ["shelf"])
+        # The shelf (its top at z = -0.95 since the replace) is an obstacle of the new world: the
+        # rope, back at z = 0.5, falls 1.45 m and lands on it.
+        s = self.step(8000)  # 2 s
+        z = heights(s)
+        self.assertLess(np.max(np.abs(z - (-0.95 + R))), 1e-3, "rope not on the shelf: %s" % z)
 
 if __name__ == "__main__":
     rostest.rosrun("corde_sim", "runtime_obstacles", RuntimeObstacles)
