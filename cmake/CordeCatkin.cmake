@@ -3,8 +3,8 @@
 
 set(CORDE_ROS_COMPONENTS
   diagnostic_msgs diagnostic_updater dynamic_reconfigure geometry_msgs interactive_markers
-  message_generation nav_msgs roscpp rosgraph_msgs roslib std_msgs std_srvs tf2 tf2_msgs tf2_ros
-  visualization_msgs)
+  message_generation nav_msgs roscpp rosgraph_msgs roslib sensor_msgs shape_msgs std_msgs std_srvs
+  tf2 tf2_msgs tf2_ros visualization_msgs)
 if(CORDE_WITH_ROS)
   # catkin snapshots the devel environment at configure time (build/catkin_generated/
   # setup_cached.sh, used by every ctest/rostest command) and only lists folders that exist
@@ -45,7 +45,7 @@ if(catkin_FOUND)
   endif()
   set(CORDE_HAS_MESSAGES OFF)
   if(CORDE_MSG_FILES OR CORDE_SRV_FILES)
-    generate_messages(DEPENDENCIES geometry_msgs std_msgs)
+    generate_messages(DEPENDENCIES geometry_msgs shape_msgs std_msgs)
     set(CORDE_HAS_MESSAGES ON)
   endif()
   # dynamic_reconfigure: cfg/Node.cfg generates corde_sim/NodeConfig.h (devel/include) and the
@@ -66,7 +66,8 @@ if(catkin_FOUND)
     LIBRARIES ${CORDE_CATKIN_LIBRARIES}
     CATKIN_DEPENDS diagnostic_msgs diagnostic_updater dynamic_reconfigure geometry_msgs
                    interactive_markers message_runtime nav_msgs roscpp rosgraph_msgs roslib
-                   std_msgs std_srvs tf2 tf2_msgs tf2_ros visualization_msgs
+                   sensor_msgs shape_msgs std_msgs std_srvs tf2 tf2_msgs tf2_ros
+                   visualization_msgs
   )
 
   # catkin and roscpp's CMake modules add directory-wide include folders and definitions

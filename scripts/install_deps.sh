@@ -29,6 +29,7 @@ packages=(
   libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libnav-msgs-dev libtf2-msgs-dev
   libros-rosgraph-msgs-dev libdiagnostic-msgs-dev
   libvisualization-msgs-dev libdiagnostic-updater-dev libinteractive-markers-dev
+  libsensor-msgs-dev libshape-msgs-dev
   # dynamic_reconfigure (cfg/Node.cfg): C++ headers, CMake macros and templates; the generator's
   # Python half (without it the NodeConfig.h generation fails)
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
@@ -41,7 +42,7 @@ packages=(
   # checks of the node (rostopic echo, rosservice call, tf_echo)
   python3-numpy python3-std-msgs python3-geometry-msgs python3-nav-msgs python3-sensor-msgs
   python3-tf2-msgs python3-rosgraph-msgs python3-std-srvs python3-diagnostic-msgs
-  python3-visualization-msgs python3-tf2-ros tf-tools
+  python3-visualization-msgs python3-tf2-ros tf-tools python3-shape-msgs
   # building in a catkin workspace (catkin build) and checking the package (catkin_lint)
   catkin-tools catkin-lint
   # visualisation: rviz, headless X server with software OpenGL, screenshots, charts

@@ -3,6 +3,7 @@
 #include "corde_sim/ros/node_outputs.h"
 
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/PointCloud2.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -29,6 +30,8 @@ void NodeOutputs::advertise() {
   tf_frames_.set_node_frames(params.node_frames);  // before the first layout
   state_pub_ = nh.advertise<WorldState>("rod_state", 10);
   if (params.publish_clock) clock_pub_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  cloud_pub_ = nh.advertise<sensor_msgs::PointCloud2>("surface_cloud", 1);
+  schedule_.set_rate(OutputSchedule::kCloud, params.cloud_rate);
 }
 
 void NodeOutputs::start_diagnostics() {
@@ -198,6 +201,7 @@ void NodeOutputs::publish_due(double now) {
   if (node_.params_.publish_clock) publish_clock();
   if (schedule_.take(OutputSchedule::kTf, now)) publish_tf();
   if (schedule_.take(OutputSchedule::kMarkers, now)) publish_markers();
+  if (schedule_.take(OutputSchedule::kCloud, now)) publish_cloud();
   // Statistics and reactions follow the state message (which runs at 2 Hz unpublished when off).
   if (schedule_.take(OutputSchedule::kState, now)) {
     update_stats(now);

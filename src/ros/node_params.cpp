@@ -8,6 +8,7 @@
 #include "corde_sim/rod/rod.h"
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_checks.h"
+#include "corde_sim/ros/surface_cloud.h"
 
 namespace corde_sim {
 namespace {
@@ -184,6 +185,17 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   if (p.tf_every_k < 1)
     bad("tf_every_k", "must be an integer >= 1, got " + std::to_string(p.tf_every_k));
   read(pnh, "node_frames", p.node_frames, false);
+  p.cloud_rate = read_rate(pnh, "cloud_rate", 10.0);
+  read(pnh, "cloud_points_per_ring", p.cloud_points_per_ring, 8);
+  if (p.cloud_points_per_ring < 3 || p.cloud_points_per_ring > kMaxCloudPointsPerRing)
+    bad("cloud_points_per_ring", "must be an integer in [3, " +
+                                     std::to_string(kMaxCloudPointsPerRing) + "], got " +
+                                     std::to_string(p.cloud_points_per_ring));
+  read(pnh, "cloud_rings_per_segment", p.cloud_rings_per_segment, 1);
+  if (p.cloud_rings_per_segment < 1 || p.cloud_rings_per_segment > kMaxCloudRingsPerSegment)
+    bad("cloud_rings_per_segment", "must be an integer in [1, " +
+                                       std::to_string(kMaxCloudRingsPerSegment) + "], got " +
+                                       std::to_string(p.cloud_rings_per_segment));
 
   std::string style;
   read<std::string>(pnh, "marker_style", style, "cylinders");

@@ -145,6 +145,9 @@ void NodeServices::advertise(const ros::NodeHandle& pnh) {
   threads_->advertise("grasp", &NodeServices::on_grasp, this);
   threads_->advertise("release", &NodeServices::on_release, this);
   threads_->advertise("list_grasps", &NodeServices::on_list_grasps, this);
+  threads_->advertise("add_obstacle", &NodeObstacles::on_add, &node_.obstacles_);
+  threads_->advertise("remove_obstacle", &NodeObstacles::on_remove, &node_.obstacles_);
+  threads_->advertise("list_obstacles", &NodeObstacles::on_list, &node_.obstacles_);
 }
 
 void NodeServices::close() {

@@ -81,8 +81,9 @@ visualization_msgs::Marker base_marker(const std::string& ns, int id, int type,
   return m;
 }
 
-// The scene's obstacles, grey and half transparent: planes as a 10 m square slab below their
-// surface, capsules as a cylinder and two spheres, meshes as triangle lists.
+// The obstacles (the scene's, the robot's, those added at run time), grey and half transparent:
+// planes as a 10 m square slab below their surface, capsules as a cylinder and two spheres, meshes
+// as triangle lists.
 void add_obstacle_markers(const corde::ObstacleSet& set, const MarkerOptions& o,
                           const ros::Time& stamp, visualization_msgs::MarkerArray* out) {
   using visualization_msgs::Marker;
@@ -90,6 +91,7 @@ void add_obstacle_markers(const corde::ObstacleSet& set, const MarkerOptions& o,
   int id = 0;
   for (int i = 0; i < set.size(); ++i) {
     const corde::Obstacle& ob = set.obstacle(i);
+    if (!ob.enabled) continue;  // removed at run time
     const Eigen::Isometry3d& pose = ob.pose;
     const Eigen::Quaterniond q(pose.linear());
     const corde::Vec3& size = ob.shape.size;

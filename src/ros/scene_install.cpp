@@ -95,6 +95,7 @@ std::string SceneInstall::install_scene(corde::Scene scene, const std::string& p
   }
   node_.sim_.install(scene.world);  // no grasps, scripts or commands; the holder limits stay
   install_robot();                  // the robot's links join the new world's obstacles
+  node_.obstacles_.install();       // so do the run-time obstacles
   initial_ = std::move(scene);
   scene_path_ = path;
   node_.settings_ = settings_from_world(node_.world_);

@@ -77,6 +77,7 @@ SimNode::SimNode(const ros::NodeHandle& nh, const ros::NodeHandle& pnh) : nh_(nh
   guard_.set_settings(guard_settings);
   sim_.set_obstacle_mover([this](corde::World* w, double h) {
     if (!scene_.robot().empty()) scene_.robot().before_step(w->obstacles.get(), h);
+    if (!obstacles_.empty()) obstacles_.before_step(w->obstacles.get(), h);
   });
   sim_.set_step_observer([this](const corde::World& w) { outputs_.watch_contacts(w); });
   corde::Scene scene;
@@ -385,6 +386,7 @@ int SimNode::run() {
     queue->callAvailable(ros::WallDuration(0));
     inputs_.update_tf_holders();
     inputs_.update_robot();
+    obstacles_.update_frames();
     drain_commands();
     now = wall_seconds();
     observe_clock(now);

@@ -36,6 +36,9 @@ struct Obstacle {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // obstacle frame in the world
   double friction = 0.5;                                   // Coulomb coefficient with rods
   bool moving = false;  // its pose may change while the scene runs (robot links)
+  // False: kept in its slot (the other obstacles' indices stay) but touched by no query; how an
+  // obstacle removed at run time leaves the set.
+  bool enabled = true;
   // A moving obstacle's velocity (world frame): of its frame's origin and its angular velocity.
   // Contacts constrain the rod's velocity relative to the obstacle's surface point.
   Vec3 linear_velocity = Vec3::Zero();
@@ -77,6 +80,9 @@ class ObstacleSet {
   // a triangle index out of range, a non-finite pose or one that is not a rotation, a negative
   // friction), naming the obstacle. A capsule's length may be 0 (a sphere).
   int add(const Obstacle& obstacle);
+  // Puts `obstacle` in slot i instead of what it holds (shape, pose, everything): the other
+  // indices stay. Throws as add() (then slot i is unchanged), std::out_of_range for a bad index.
+  void replace(int i, const Obstacle& obstacle);
   int size() const;
   const Obstacle& obstacle(int i) const;
   // Moves obstacle i (its bounding boxes are refreshed). Throws std::out_of_range for a bad

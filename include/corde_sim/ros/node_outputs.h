@@ -48,6 +48,7 @@ class NodeOutputs {
   void publish_markers();
   void publish_paths();  // rods/<rod>/path and rods/<rod>/poses, at the marker rate
   void publish_state();
+  void publish_cloud();  // surface_cloud, while someone subscribes (cloud_output.cpp)
   void publish_clock();
   void update_stats(double now);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
@@ -55,6 +56,7 @@ class NodeOutputs {
 
   SimNode& node_;
   ros::Publisher tf_pub_, marker_pub_, state_pub_, clock_pub_;
+  ros::Publisher cloud_pub_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   TfFrames tf_frames_;
   RodPaths rod_paths_;

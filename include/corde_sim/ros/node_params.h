@@ -45,6 +45,10 @@ struct NodeParams {
   bool node_frames = false;   // also a frame at every node (<rod>/node_<i>)
   double marker_rate = 20.0;  // Hz of wall time, 0 = off
   double state_rate = 50.0;   // Hz of wall time, 0 = off
+  // surface_cloud (sensor_msgs/PointCloud2): Hz of wall time (0 = off; built only while someone
+  // subscribes), and its density (surface_cloud.h).
+  double cloud_rate = 10.0;
+  int cloud_points_per_ring = 8, cloud_rings_per_segment = 1;
   MarkerStyle marker_style = MarkerStyle::kCylinders;
   bool show_frames = false;
   bool color_by_strain = true;

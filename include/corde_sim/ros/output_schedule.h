@@ -16,7 +16,7 @@ namespace corde_sim {
 
 class OutputSchedule {
  public:
-  enum Output { kTf, kMarkers, kState, kCount };
+  enum Output { kTf, kMarkers, kState, kCloud, kCount };
 
   // rate 0 = never due. A new rate takes effect from the next tick after the last time seen.
   void set_rate(Output o, double hz) {

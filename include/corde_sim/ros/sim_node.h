@@ -25,6 +25,7 @@
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/node_clock.h"
 #include "corde_sim/ros/node_inputs.h"
+#include "corde_sim/ros/node_obstacles.h"
 #include "corde_sim/ros/node_outputs.h"
 #include "corde_sim/ros/node_params.h"
 #include "corde_sim/ros/node_services.h"
@@ -77,6 +78,7 @@ class SimNode {
 
  private:
   friend class NodeInputs;
+  friend class NodeObstacles;
   friend class NodeOutputs;
   friend class NodeServices;
   friend class SceneInstall;
@@ -142,6 +144,7 @@ class SimNode {
   NodeInputs inputs_{this};
   NodeOutputs outputs_{this};
   NodeServices services_{this};
+  NodeObstacles obstacles_{this};  // added at run time (~add_obstacle)
 };
 
 // A tf transform as an isometry (rotation normalised).

@@ -253,9 +253,11 @@ struct ObstacleSet::Impl {
 ObstacleSet::ObstacleSet() : impl_(new Impl) {}
 ObstacleSet::~ObstacleSet() = default;
 
-int ObstacleSet::add(const Obstacle& obstacle) {
+namespace {
+
+// An obstacle checked and prepared for slot `index`; throws std::invalid_argument naming it.
+Entry make_entry(const Obstacle& obstacle, int index) {
   using Kind = ObstacleShape::Kind;
-  const int index = size();
   const std::string who = label(obstacle, index);
   const Vec3& size = obstacle.shape.size;
   auto positive = [&](double v, const char* what) {
@@ -317,8 +319,20 @@ int ObstacleSet::add(const Obstacle& obstacle) {
     e.object = std::make_unique<fcl::CollisionObjectd>(e.geom);
   }
   refresh_world_box(&e);
-  impl_->entries.push_back(std::move(e));
+  return e;
+}
+
+}  // namespace
+
+int ObstacleSet::add(const Obstacle& obstacle) {
+  const int index = size();
+  impl_->entries.push_back(make_entry(obstacle, index));
   return index;
+}
+
+void ObstacleSet::replace(int i, const Obstacle& obstacle) {
+  Entry& slot = impl_->entries.at(i);
+  slot = make_entry(obstacle, i);
 }
 
 int ObstacleSet::size() const { return static_cast<int>(impl_->entries.size()); }
@@ -551,6 +565,7 @@ void ObstacleSet::query(const Vec3& a, const Vec3& b, double rod_reach,
   const Box3 seg_box = Box3(a.cwiseMin(b), a.cwiseMax(b));
   for (size_t i = 0; i < impl_->entries.size(); ++i) {
     const Entry& e = impl_->entries[i];
+    if (!e.ob.enabled) continue;
     const Eigen::Isometry3d& pose = e.ob.pose;
     const Vec3& size = e.ob.shape.size;
     double reach = rod_reach;

@@ -5,6 +5,7 @@
 #include <map>
 #include <optional>
 
+#include "corde_sim/contact/obstacle_checks.h"
 #include "corde_sim/contact/urdf_obstacles.h"
 #include "scene_reader.h"
 
@@ -274,14 +275,12 @@ void check_obstacles_at_start(const World& world, const std::vector<std::string>
   // Every obstacle as placed (URDF links too, posed through their chains): far beyond the bounds
   // of the scene's keys, the geometry queries fail ("too many iterations in Jacobi transform").
   for (int i = 0; i < world.obstacles->size(); ++i) {
-    const Obstacle& o = world.obstacles->obstacle(i);
-    const double far =
-        std::max(o.pose.translation().cwiseAbs().maxCoeff(), o.shape.size.cwiseAbs().maxCoeff());
-    if (!(far <= SceneBounds::max_placed_length))
+    const std::string far =
+        check_placed_extent(world.obstacles->obstacle(i), SceneBounds::max_placed_length);
+    if (!far.empty())
       throw SceneError((static_cast<size_t>(i) < obstacle_paths.size() ? obstacle_paths[i]
                                                                        : std::string("obstacles")) +
-                       ": obstacle '" + o.name + "' has a position or size of " + num(far) +
-                       " m, beyond " + num(SceneBounds::max_placed_length) + " m");
+                       ": " + far);
   }
   std::vector<SegmentContact> found;
   std::vector<int> which;

@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace corde {
 namespace {
@@ -382,6 +383,46 @@ TEST(Obstacle, DegenerateSegment) {
   EXPECT_NEAR(out[0].distance, 1.0, 1e-9);
   EXPECT_NEAR(out[1].distance, 1.0, 1e-9);
   EXPECT_NEAR(out[2].distance, 1.0, 1e-9);
+}
+
+// Run-time changes: replace() keeps every other index, a disabled obstacle is found by no
+// query, and a refused replacement leaves the slot as it was.
+TEST(Obstacle, ReplaceAndDisableKeepIndices) {
+  ObstacleSet set;
+  Obstacle a, b;
+  a.name = "a";
+  a.shape.kind = ObstacleShape::Kind::kSphere;
+  a.shape.size.x() = 0.1;
+  b = a;
+  b.name = "b";
+  b.pose.translation() = Vec3(1.0, 0.0, 0.0);
+  set.add(a);
+  set.add(b);
+  std::vector<SegmentContact> found;
+  std::vector<int> which;
+  const Vec3 p0(0.0, -1.0, 0.15), p1(0.0, 1.0, 0.15);  // 5 cm above sphere a
+  set.query(p0, p1, 0.1, &found, &which);
+  ASSERT_EQ(which, std::vector<int>{0});
+  Obstacle off = a;
+  off.enabled = false;
+  set.replace(0, off);
+  found.clear();
+  which.clear();
+  set.query(p0, p1, 0.1, &found, &which);
+  EXPECT_TRUE(which.empty());
+  Obstacle bad = a;
+  bad.shape.size.x() = -1.0;
+  EXPECT_THROW(set.replace(0, bad), std::invalid_argument);
+  EXPECT_FALSE(set.obstacle(0).enabled);
+  a.pose.translation() = Vec3(0.0, 0.0, 0.1);  // moved up: the segment now passes inside
+  set.replace(0, a);
+  found.clear();
+  which.clear();
+  set.query(p0, p1, 0.1, &found, &which);
+  ASSERT_EQ(which, std::vector<int>{0});
+  EXPECT_LT(found[0].distance, 0.0);
+  EXPECT_EQ(set.obstacle(1).name, "b");
+  EXPECT_THROW(set.replace(2, a), std::out_of_range);
 }
 
 }  // namespace
