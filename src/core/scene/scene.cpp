@@ -77,11 +77,10 @@ LoadDescription describe_load(const Value& entry) {
 
 // A rod's own keys (RodDescription), after the rods `before` it.
 RodDescription describe_rod(const Value& v, int index, const std::vector<RodDescription>& before,
-                            const std::optional<Value>& default_state) {
+                            const std::optional<Value>& default_state, const std::string& base) {
   RodDescription r;
   r.path = v.path();
-  r.map.emplace(v);
-  Map& m = *r.map;
+  Map m(v);
   RodSpec& spec = r.spec;
   spec.name = "rod" + std::to_string(index);
   if (auto p = m.find("name")) {
@@ -101,7 +100,8 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
               " elements together, more than the limit of " +
               std::to_string(SceneLimits::max_total_elements));
   spec.section = read_section(&m);
-  spec.shape = read_shape(m.get("shape"));
+  r.shape_key = m.get("shape");
+  spec.shape = read_shape(*r.shape_key);
   if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
   if (auto p = m.find("rest_shape"))
     spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
@@ -119,20 +119,66 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
                   "perturbation) or set initial_state: given on the rod");
     r.equilibrium = state;
   }
+  if (auto i = m.find("initial")) r.initial = describe_initial(*i, spec.elements);
+  if (auto b = m.find("boundary"))
+    for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))
+      r.boundary.push_back(describe_boundary(item, base));
   if (auto l = m.find("loads"))
     for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
       r.loads.push_back(describe_load(item));
+  // A number >= 1, or auto (stability/explicit_step_limit.h, lifting_inertia_scale: computed on
+  // the rod as built and held).
+  if (auto p = m.find("rotational_inertia_scale")) {
+    if (p->is_scalar() && p->node().Scalar() == "auto") {
+      r.inertia_scale_auto = p->path();
+    } else {
+      const double scale = p->number();
+      if (!(scale >= 1.0))
+        p->fail("must be >= 1 (1 = physical rotary inertia) or auto, got " + num(scale));
+      p->within(1.0, SceneBounds::max_factor, "");
+      r.inertia_scale = scale;
+    }
+  }
+  m.finish();
   return r;
 }
 
 }  // namespace
 
+// The items of a list, failing when there are more than `limit` of them.
+std::vector<Value> limited_items(const Value& list, int limit, const char* what) {
+  if (list.is_sequence() && list.node().size() > static_cast<size_t>(limit))
+    list.fail("has " + std::to_string(list.node().size()) + " " + what +
+              ", more than the limit of " + std::to_string(limit));
+  return list.items();
+}
+
+IndexRef describe_index(const Value& v, const char* what) {
+  IndexRef ref;
+  ref.key = v;
+  if (v.is_scalar() && v.node().Scalar() == "start") return ref;
+  ref.kind = IndexRef::Kind::kEnd;
+  if (v.is_scalar() && v.node().Scalar() == "end") return ref;
+  if (!v.is_scalar()) v.fail(std::string("expected a ") + what + " index, start or end");
+  ref.kind = IndexRef::Kind::kIndex;
+  try {
+    ref.index = v.node().as<double>();
+  } catch (const YAML::Exception&) {
+    v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
+  }
+  return ref;
+}
+
+// `initial_state`: given (the shape and velocities as described) or equilibrium.
+bool wants_equilibrium(const Value& v) {
+  return v.choice({"given", "equilibrium"}) == "equilibrium";
+}
+
 SceneDescription describe_scene(const YAML::Node& root, const std::string& source) {
   SceneDescription d;
   d.source = source;
   d.name = source == "<string>" ? "scene" : stem(source);
-  d.top.emplace(Value(root, ""));
-  Map& top = *d.top;
+  Map top(Value(root, ""));
   if (auto v = top.find("name")) d.name = v->string();
   if (auto v = top.find("description")) d.description = v->string();
   if (auto v = top.find("gravity")) d.gravity = v->vec3(SceneBounds::max_acceleration, "m/s^2");
@@ -170,10 +216,20 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
   const std::optional<Value> default_state = top.find("initial_state");
   if (default_state) wants_equilibrium(*default_state);  // checks the value
   for (size_t i = 0; i < items.size(); ++i)
-    d.rods.push_back(describe_rod(items[i], static_cast<int>(i), d.rods, default_state));
-  d.contact = top.find("contact");
-  d.obstacles = top.find("obstacles");
-  d.grasps = top.find("grasps");
+    d.rods.push_back(describe_rod(items[i], static_cast<int>(i), d.rods, default_state, d.base));
+  if (auto v = top.find("contact")) {
+    d.contact = ContactSettings();
+    read_contact_settings(*v, &*d.contact);
+  }
+  if (auto v = top.find("obstacles")) {
+    ObstaclesDescription& o = d.obstacles.emplace();
+    read_obstacles(*v, &o.set, &o.motions, d.base, &o.paths);
+    check_obstacle_placement(*o.set, o.paths);
+  }
+  if (auto v = top.find("grasps"))
+    for (const Value& item : limited_items(*v, SceneLimits::max_grasps, "grasps"))
+      d.grasps.push_back(describe_grasp(item, d.rods, d.grasps, d.base));
+  top.finish();
   return d;
 }
 

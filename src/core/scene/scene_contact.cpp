@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "corde_sim/contact/urdf_obstacles.h"
+#include "corde_sim/scene/obstacle_checks.h"
 #include "scene_reader.h"
 
 namespace corde {
@@ -122,17 +123,18 @@ std::map<std::string, std::shared_ptr<const Motion>> read_joint_motions(
 
 }  // namespace
 
-void read_obstacles(const Value& list, World* world, const std::string& base,
+void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
+                    std::vector<ObstacleMotion>* motions, const std::string& base,
                     std::vector<std::string>* paths) {
   if (!list.is_sequence()) list.fail("expected a list of obstacles, got " + list.describe());
   if (list.node().size() > static_cast<size_t>(SceneLimits::max_items))
     list.fail("has " + std::to_string(list.node().size()) + " obstacles, more than the limit of " +
               std::to_string(SceneLimits::max_items));
-  if (!world->obstacles) world->obstacles = std::make_shared<ObstacleSet>();
+  if (!*set) *set = std::make_shared<ObstacleSet>();
   // The entry of each obstacle added (a URDF adds several).
   std::string last;
   auto note = [&] {
-    if (paths) paths->resize(static_cast<size_t>(world->obstacles->size()), last);
+    if (paths) paths->resize(static_cast<size_t>((*set)->size()), last);
   };
   int index = 0;
   for (const Value& item : list.items()) {
@@ -209,7 +211,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
         o.friction = friction;
         // Marked moving by the URDF (behind a movable joint) only if asked to or driven.
         o.moving = moving || motion || follows_joints;
-        const int i = add(world->obstacles.get(), o, item);
+        const int i = add(set->get(), o, item);
         if (!driven) continue;
         ObstacleMotion om;
         om.obstacle = i;
@@ -226,7 +228,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
               return q;
             });
           };
-        if (motion || follows_joints) world->obstacle_motions.push_back(std::move(om));
+        if (motion || follows_joints) motions->push_back(std::move(om));
       }
       continue;
     }
@@ -256,33 +258,34 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
     const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, o.pose, base);
     o.moving = moving || keyframed(motion != nullptr);
     m.finish();
-    const int i = add(world->obstacles.get(), o, item);
+    const int i = add(set->get(), o, item);
     if (motion) {
       ObstacleMotion om;
       om.obstacle = i;
       om.motion = motion;
       om.start = o.pose;
-      world->obstacle_motions.push_back(std::move(om));
+      motions->push_back(std::move(om));
     }
   }
   note();
 }
 
-void check_obstacles_at_start(const World& world, const std::vector<std::string>& obstacle_paths,
-                              const std::vector<std::string>& rod_paths) {
-  if (!world.obstacles || world.obstacles->size() == 0) return;
+void check_obstacle_placement(const ObstacleSet& set, const std::vector<std::string>& paths) {
   // Every obstacle as placed (URDF links too, posed through their chains): far beyond the bounds
   // of the scene's keys, the geometry queries fail ("too many iterations in Jacobi transform").
-  for (int i = 0; i < world.obstacles->size(); ++i) {
-    const Obstacle& o = world.obstacles->obstacle(i);
-    const double far =
-        std::max(o.pose.translation().cwiseAbs().maxCoeff(), o.shape.size.cwiseAbs().maxCoeff());
-    if (!(far <= SceneBounds::max_placed_length))
-      throw SceneError((static_cast<size_t>(i) < obstacle_paths.size() ? obstacle_paths[i]
-                                                                       : std::string("obstacles")) +
-                       ": obstacle '" + o.name + "' has a position or size of " + num(far) +
-                       " m, beyond " + num(SceneBounds::max_placed_length) + " m");
+  for (int i = 0; i < set.size(); ++i) {
+    const std::string why = obstacle_placement_error(set.obstacle(i));
+    if (!why.empty())
+      throw SceneError(
+          (static_cast<size_t>(i) < paths.size() ? paths[i] : std::string("obstacles")) + ": " +
+          why);
   }
+}
+
+void check_rods_clear_of_obstacles(const World& world,
+                                   const std::vector<std::string>& obstacle_paths,
+                                   const std::vector<std::string>& rod_paths) {
+  if (!world.obstacles || world.obstacles->size() == 0) return;
   std::vector<SegmentContact> found;
   std::vector<int> which;
   for (size_t r = 0; r < world.rods().size(); ++r) {
