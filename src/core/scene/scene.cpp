@@ -75,6 +75,12 @@ LoadDescription describe_load(const Value& entry) {
   return d;
 }
 
+[[noreturn]] void fail_total(const Value& key, long total) {
+  key.fail("the scene's rods would have " + std::to_string(total) +
+           " elements together, more than the limit of " +
+           std::to_string(SceneLimits::max_total_elements));
+}
+
 // A rod's own keys (RodDescription), after the rods `before` it.
 RodDescription describe_rod(const Value& v, int index, const std::vector<RodDescription>& before,
                             const std::optional<Value>& default_state, const std::string& base) {
@@ -91,14 +97,16 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
         p->fail("duplicate rod name " + echo(spec.name) + " (also " + b.path + ")");
   }
   std::optional<Value> elements = m.find("elements");
-  if (elements) spec.elements = elements->integer(1, SceneLimits::max_elements);
+  r.elements_key = elements ? *elements : v;
+  if (elements && elements->is_scalar() && elements->node().Scalar() == "auto") {
+    r.auto_elements = true;  // counted once chosen (scene_elements.h)
+    spec.elements = 0;
+  } else if (elements) {
+    spec.elements = elements->integer(1, SceneLimits::max_elements);
+  }
   long total = spec.elements;
   for (const RodDescription& b : before) total += b.spec.elements;
-  if (total > SceneLimits::max_total_elements)
-    (elements ? *elements : v)
-        .fail("the scene's rods would have " + std::to_string(total) +
-              " elements together, more than the limit of " +
-              std::to_string(SceneLimits::max_total_elements));
+  if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
   spec.section = read_section(&m);
   r.shape_key = m.get("shape");
   spec.shape = read_shape(*r.shape_key);
@@ -119,7 +127,8 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
                   "perturbation) or set initial_state: given on the rod");
     r.equilibrium = state;
   }
-  if (auto i = m.find("initial")) r.initial = describe_initial(*i, spec.elements);
+  if (auto i = m.find("initial"))
+    r.initial = describe_initial(*i, r.auto_elements ? -1 : spec.elements);
   if (auto b = m.find("boundary"))
     for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))
       r.boundary.push_back(describe_boundary(item, base));
@@ -174,6 +183,14 @@ bool wants_equilibrium(const Value& v) {
   return v.choice({"given", "equilibrium"}) == "equilibrium";
 }
 
+void check_total_elements(const std::vector<RodDescription>& rods) {
+  long total = 0;
+  for (const RodDescription& r : rods) {
+    total += r.spec.elements;
+    if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
+  }
+}
+
 SceneDescription describe_scene(const YAML::Node& root, const std::string& source) {
   SceneDescription d;
   d.source = source;
@@ -195,9 +212,16 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
                                                              : Scene::Mode::kDynamics;
   if (auto v = top.find("statics_time"))
     d.statics_time = v->non_negative(SceneBounds::max_time, "s");
-  if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
-    v->positive();
-    d.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+  if (auto v = top.find("shape_tolerance")) {
+    if (has_auto_elements(root)) {
+      d.shape_tolerance = v->number();
+      if (!(*d.shape_tolerance >= kMinShapeTolerance && *d.shape_tolerance <= kMaxShapeTolerance))
+        v->fail("must be in [" + num(kMinShapeTolerance) + ", " + num(kMaxShapeTolerance) +
+                "] (a fraction of the rod's length), got " + num(*d.shape_tolerance));
+    } else {
+      v->positive();
+      d.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+    }
   }
   std::optional<Value> step = top.find("time_step");
   if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {
@@ -223,8 +247,8 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
   }
   if (auto v = top.find("obstacles")) {
     ObstaclesDescription& o = d.obstacles.emplace();
-    read_obstacles(*v, &o.set, &o.motions, d.base, &o.paths);
-    check_obstacle_placement(*o.set, o.paths);
+    read_obstacles(*v, &o.obstacles, &o.motions, d.base, &o.paths);
+    check_obstacle_placement(o.obstacles, o.paths);
   }
   if (auto v = top.find("grasps"))
     for (const Value& item : limited_items(*v, SceneLimits::max_grasps, "grasps"))
@@ -237,11 +261,10 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
 
 namespace {
 
-// The three passes on a tree whose overrides are applied and whose elements are counts.
-Scene load_tree(const YAML::Node& root, const std::string& source) {
-  scene_detail::SceneDescription description = scene_detail::describe_scene(root, source);
+// Passes (b) and (c) on a description whose rods all have their element counts.
+Scene build_description(const scene_detail::SceneDescription& description) {
   scene_detail::AutomaticRequests requests;
-  Scene scene = scene_detail::build_scene(&description, &requests);
+  Scene scene = scene_detail::build_scene(description, &requests);
   scene_detail::make_automatic_choices(&scene, requests);
   return scene;
 }
@@ -266,12 +289,12 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
   if (!root.IsDefined() || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   const std::vector<std::string> set = scene_detail::apply_overrides(&root, overrides);
   try {
-    // elements: auto first: it probes the scene (passes a to c) at two resolutions per choice.
-    std::vector<std::string> notes;
-    if (scene_detail::has_auto_elements(root))
-      notes = scene_detail::choose_elements(
-          &root, [&](const YAML::Node& tree) { return load_tree(tree, source); });
-    Scene scene = load_tree(root, source);
+    scene_detail::SceneDescription description = scene_detail::describe_scene(root, source);
+    // elements: auto: probe builds (passes b and c) of the description at two resolutions per
+    // choice.
+    const std::vector<std::string> notes =
+        scene_detail::choose_elements(&description, build_description);
+    Scene scene = build_description(description);
     scene.notes.insert(scene.notes.begin(), notes.begin(), notes.end());
     return scene;
   } catch (const SceneError& e) {

@@ -100,30 +100,31 @@ int resolve_index(const IndexRef& ref, int count, const char* what) {
   return static_cast<int>(d);
 }
 
-Scene build_scene(SceneDescription* d, AutomaticRequests* requests) {
+Scene build_scene(const SceneDescription& d, AutomaticRequests* requests) {
   Scene scene;
-  scene.source = d->source;
-  scene.name = d->name;
-  scene.description = d->description;
-  if (d->gravity) scene.world.gravity = *d->gravity;
-  scene.world.integrator = d->integrator;
-  if (d->time_step) scene.world.time_step = *d->time_step;
-  scene.duration = d->duration;
-  scene.mode = d->mode;
-  scene.statics_time = d->statics_time;
-  scene.warnings = d->warnings;
+  scene.source = d.source;
+  scene.name = d.name;
+  scene.description = d.description;
+  if (d.gravity) scene.world.gravity = *d.gravity;
+  scene.world.integrator = d.integrator;
+  if (d.time_step) scene.world.time_step = *d.time_step;
+  scene.duration = d.duration;
+  scene.mode = d.mode;
+  scene.statics_time = d.statics_time;
+  scene.warnings = d.warnings;
 
   std::vector<RodEntry> entries;
-  for (const RodDescription& r : d->rods) build_rod_entry(r, &scene, &entries);
-  if (d->contact) scene.world.contact = *d->contact;
-  if (d->obstacles) {
-    scene.world.obstacles = std::move(d->obstacles->set);
-    scene.world.obstacle_motions = std::move(d->obstacles->motions);
+  for (const RodDescription& r : d.rods) build_rod_entry(r, &scene, &entries);
+  if (d.contact) scene.world.contact = *d.contact;
+  if (d.obstacles) {
+    scene.world.obstacles = std::make_shared<ObstacleSet>();
+    for (const Obstacle& o : d.obstacles->obstacles) scene.world.obstacles->add(o);
+    scene.world.obstacle_motions = d.obstacles->motions;
     std::vector<std::string> rod_paths;
     for (const RodEntry& e : entries) rod_paths.push_back(e.path);
-    check_rods_clear_of_obstacles(scene.world, d->obstacles->paths, rod_paths);
+    check_rods_clear_of_obstacles(scene.world, d.obstacles->paths, rod_paths);
   }
-  for (const GraspDescription& g : d->grasps) {
+  for (const GraspDescription& g : d.grasps) {
     const Rod& rod = scene.world.rods()[g.rod];
     scene.grasps.push_back(build_grasp(g, rod, &entries[g.rod].owners));
     const GraspSpec& spec = scene.grasps.back();
@@ -142,8 +143,8 @@ Scene build_scene(SceneDescription* d, AutomaticRequests* requests) {
     support.midpoint_of = seg;
     scene.supports.push_back(support);
   }
-  requests->integrator_auto = d->integrator_auto;
-  if (d->time_step) requests->time_step = d->time_step_key;
+  requests->integrator_auto = d.integrator_auto;
+  if (d.time_step) requests->time_step = d.time_step_key;
   for (size_t i = 0; i < entries.size(); ++i)
     if (entries[i].equilibrium)
       requests->equilibrium.push_back(

@@ -123,18 +123,24 @@ std::map<std::string, std::shared_ptr<const Motion>> read_joint_motions(
 
 }  // namespace
 
-void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
+void read_obstacles(const Value& list, std::vector<Obstacle>* obstacles,
                     std::vector<ObstacleMotion>* motions, const std::string& base,
                     std::vector<std::string>* paths) {
   if (!list.is_sequence()) list.fail("expected a list of obstacles, got " + list.describe());
   if (list.node().size() > static_cast<size_t>(SceneLimits::max_items))
     list.fail("has " + std::to_string(list.node().size()) + " obstacles, more than the limit of " +
               std::to_string(SceneLimits::max_items));
-  if (!*set) *set = std::make_shared<ObstacleSet>();
+  // Each obstacle as an ObstacleSet accepts it (the set is the judge of its shape and pose).
+  ObstacleSet set;
+  auto add_obstacle = [&](const Obstacle& o, const Value& where) {
+    const int i = add(&set, o, where);
+    obstacles->push_back(o);
+    return i;
+  };
   // The entry of each obstacle added (a URDF adds several).
   std::string last;
   auto note = [&] {
-    if (paths) paths->resize(static_cast<size_t>((*set)->size()), last);
+    if (paths) paths->resize(static_cast<size_t>(set.size()), last);
   };
   int index = 0;
   for (const Value& item : list.items()) {
@@ -211,7 +217,7 @@ void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
         o.friction = friction;
         // Marked moving by the URDF (behind a movable joint) only if asked to or driven.
         o.moving = moving || motion || follows_joints;
-        const int i = add(set->get(), o, item);
+        const int i = add_obstacle(o, item);
         if (!driven) continue;
         ObstacleMotion om;
         om.obstacle = i;
@@ -258,7 +264,7 @@ void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
     const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, o.pose, base);
     o.moving = moving || keyframed(motion != nullptr);
     m.finish();
-    const int i = add(set->get(), o, item);
+    const int i = add_obstacle(o, item);
     if (motion) {
       ObstacleMotion om;
       om.obstacle = i;
@@ -270,15 +276,14 @@ void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
   note();
 }
 
-void check_obstacle_placement(const ObstacleSet& set, const std::vector<std::string>& paths) {
+void check_obstacle_placement(const std::vector<Obstacle>& obstacles,
+                              const std::vector<std::string>& paths) {
   // Every obstacle as placed (URDF links too, posed through their chains): far beyond the bounds
   // of the scene's keys, the geometry queries fail ("too many iterations in Jacobi transform").
-  for (int i = 0; i < set.size(); ++i) {
-    const std::string why = obstacle_placement_error(set.obstacle(i));
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    const std::string why = obstacle_placement_error(obstacles[i]);
     if (!why.empty())
-      throw SceneError(
-          (static_cast<size_t>(i) < paths.size() ? paths[i] : std::string("obstacles")) + ": " +
-          why);
+      throw SceneError((i < paths.size() ? paths[i] : std::string("obstacles")) + ": " + why);
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -301,8 +302,12 @@ InitialDescription describe_initial(const Value& v, int segments) {
       list->fail("more than the limit of " + std::to_string(SceneLimits::max_items) + " entries");
     for (const Value& item : list->items()) {
       Map e(item);
-      const int i = e.get("node").integer(0, segments);
-      d.node_velocities.emplace_back(i, e.get("velocity").vec3(SceneBounds::max_speed, "m/s"));
+      InitialDescription::Indexed n;
+      const Value key = e.get("node");
+      n.index = key.integer(0, segments < 0 ? std::numeric_limits<int>::max() : segments);
+      if (segments < 0) n.deferred = key;
+      n.value = e.get("velocity").vec3(SceneBounds::max_speed, "m/s");
+      d.node_velocities.push_back(n);
       e.finish();
     }
   }
@@ -311,9 +316,12 @@ InitialDescription describe_initial(const Value& v, int segments) {
       list->fail("more than the limit of " + std::to_string(SceneLimits::max_items) + " entries");
     for (const Value& item : list->items()) {
       Map e(item);
-      const int s = e.get("segment").integer(0, segments - 1);
-      d.segment_angular_velocities.emplace_back(
-          s, e.get("angular_velocity").vec3(SceneBounds::max_angular_speed, "rad/s"));
+      InitialDescription::Indexed n;
+      const Value key = e.get("segment");
+      n.index = key.integer(0, segments < 0 ? std::numeric_limits<int>::max() : segments - 1);
+      if (segments < 0) n.deferred = key;
+      n.value = e.get("angular_velocity").vec3(SceneBounds::max_angular_speed, "rad/s");
+      d.segment_angular_velocities.push_back(n);
       e.finish();
     }
   }
@@ -342,9 +350,13 @@ void apply_initial(const InitialDescription& d, Rod* rod) {
   const Vec3 spin = d.angular_velocity ? *d.angular_velocity : Vec3::Zero();
   for (size_t i = 0; i < x.size(); ++i) vel[i] = lin + spin.cross(x[i] - c);
   for (size_t s = 0; s < q.size(); ++s) w[s] = q[s].conjugate() * spin;
-  for (const auto& nv : d.node_velocities) vel[nv.first] = nv.second;
-  for (const auto& sw : d.segment_angular_velocities)
-    w[sw.first] = q[sw.first].conjugate() * sw.second;
+  const int n = rod->num_segments();
+  for (const InitialDescription::Indexed& e : d.node_velocities)
+    vel[e.deferred ? e.deferred->integer(0, n) : e.index] = e.value;
+  for (const InitialDescription::Indexed& e : d.segment_angular_velocities) {
+    const int s = e.deferred ? e.deferred->integer(0, n - 1) : e.index;
+    w[s] = q[s].conjugate() * e.value;
+  }
   if (d.perturbed) {
     // Uniform in [-a, a] per component from a 32-bit Mersenne Twister (std::mt19937, whose output
     // the C++ standard fixes), node by node, x then y then z: the same seed gives the same rod on

@@ -13,9 +13,9 @@
 //       name it and its line.
 //   (c) make_automatic_choices: on the built scene, initial_state: equilibrium, then time_step:
 //       auto and integrator: auto, each logged with its reason in Scene::notes or settled. It
-//       counts work, never time, so the result depends on the scene only. (elements: auto runs
-//       before (a): it rewrites the tree after probe runs of (a) to (c) at two resolutions,
-//       scene_elements.h.)
+//       counts work, never time, so the result depends on the scene only. elements: auto runs
+//       between (a) and (b): it sets the rods' counts in the description after probe builds
+//       (b, c) of it at two resolutions (scene_elements.h).
 // Of several errors in a file, the first in pass (a) (in file order) is reported.
 #pragma once
 
@@ -97,6 +97,9 @@ struct GraspDescription {
 struct RodDescription {
   std::string path;  // "rods[0]"
   RodSpec spec;      // name, elements, section (material, radius), shape, reference_d1, rest_shape
+  // elements: auto: spec.elements is 0 until choose_elements() sets it (scene_elements.h).
+  bool auto_elements = false;
+  std::optional<Value> elements_key;
   std::optional<Value> shape_key;  // names the shape when the built rod's length is out of range
   std::optional<Drag> drag;
   std::optional<ContactOptions> contact;
@@ -111,11 +114,12 @@ struct RodDescription {
 };
 
 // The obstacles of the scene (scene_contact.cpp): placed and keyframed as read, since they depend
-// on no rod; pass (b) moves them into the world and checks that no rod starts inside one.
+// on no rod, and accepted by an ObstacleSet once; pass (b) adds them to a new set of the world
+// (each build its own: a run moves them) and checks that no rod starts inside one.
 struct ObstaclesDescription {
-  std::shared_ptr<ObstacleSet> set;
+  std::vector<Obstacle> obstacles;
   std::vector<ObstacleMotion> motions;
-  std::vector<std::string> paths;  // the entry ("obstacles[2]") of each obstacle in `set`
+  std::vector<std::string> paths;  // the entry ("obstacles[2]") of each obstacle
 };
 
 // Pass (a)'s result.
@@ -131,6 +135,7 @@ struct SceneDescription {
   double statics_time = 0.0;        // s
   std::optional<double> time_step;  // s; none: time_step: auto
   std::optional<Value> time_step_key;
+  std::optional<double> shape_tolerance;  // given with a rod's elements: auto
   std::vector<std::string> warnings;
   std::vector<RodDescription> rods;  // at least one, at most SceneLimits::max_rods
   std::optional<ContactSettings> contact;
@@ -149,7 +154,10 @@ struct Owners {
 };
 
 SceneDescription describe_scene(const YAML::Node& root, const std::string& source);
-Scene build_scene(SceneDescription* description, AutomaticRequests* requests);
+Scene build_scene(const SceneDescription& description, AutomaticRequests* requests);
+// The rods' elements together within SceneLimits::max_total_elements; fails naming the elements
+// key of the rod that crosses it.
+void check_total_elements(const std::vector<RodDescription>& rods);
 
 // A `boundary` entry, and its drives and constraints on the built rod, recorded as a support
 // (scene_boundary.cpp).

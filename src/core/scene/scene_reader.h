@@ -172,11 +172,16 @@ std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
                                           const std::string& base);
 
 // A rod's `initial` key (velocities, spins, a seeded perturbation), read for a rod of `segments`
-// segments, then applied to the built rod (scene_motion.cpp).
+// segments (-1: elements: auto, its node and segment numbers checked against the built rod), then
+// applied to the built rod (scene_motion.cpp).
 struct InitialDescription {
-  std::optional<Vec3> velocity, angular_velocity;                // m/s, rad/s
-  std::vector<std::pair<int, Vec3>> node_velocities;             // node, m/s
-  std::vector<std::pair<int, Vec3>> segment_angular_velocities;  // segment, rad/s (world frame)
+  struct Indexed {
+    int index = 0;
+    Vec3 value = Vec3::Zero();      // m/s or rad/s (world frame)
+    std::optional<Value> deferred;  // the index key, when the count was unknown
+  };
+  std::optional<Vec3> velocity, angular_velocity;  // m/s, rad/s
+  std::vector<Indexed> node_velocities, segment_angular_velocities;
   bool perturbed = false;
   double position_amplitude = 0.0, velocity_amplitude = 0.0;  // m, m/s
   int seed = 1;
@@ -184,15 +189,17 @@ struct InitialDescription {
 InitialDescription describe_initial(const Value& v, int segments);
 void apply_initial(const InitialDescription& d, Rod* rod);
 
-// The top-level `obstacles` list into *set (made when null) and *motions (URDF files relative to
-// `base`), the top-level `contact` settings, and a rod's `contact` options (scene_contact.cpp).
-// `paths` (optional) receives the entry's path ("obstacles[2]") of each obstacle added.
-void read_obstacles(const Value& list, std::shared_ptr<ObstacleSet>* set,
+// The top-level `obstacles` list into *obstacles (each as an ObstacleSet accepted it, in the order
+// to add them) and *motions (URDF files relative to `base`), the top-level `contact` settings, and
+// a rod's `contact` options (scene_contact.cpp). `paths` (optional) receives the entry's path
+// ("obstacles[2]") of each obstacle.
+void read_obstacles(const Value& list, std::vector<Obstacle>* obstacles,
                     std::vector<ObstacleMotion>* motions, const std::string& base,
                     std::vector<std::string>* paths = nullptr);
 // Refuses an obstacle placed beyond SceneBounds::max_placed_length, naming its entry
 // (scene/obstacle_checks.h). `paths` from read_obstacles().
-void check_obstacle_placement(const ObstacleSet& set, const std::vector<std::string>& paths);
+void check_obstacle_placement(const std::vector<Obstacle>& obstacles,
+                              const std::vector<std::string>& paths);
 // Refuses a rod with obstacle contact whose axis starts deeper inside an obstacle than 1% of its
 // radius (naming rods[i], the obstacle, the segment and the depth): the contact would throw it out
 // at a runaway speed. `rod_paths` per rod.
