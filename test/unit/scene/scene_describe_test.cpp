@@ -72,6 +72,20 @@ TEST(SceneDescribe, BadKeyframeReportedBeforeAnythingIsBuilt) {
       "(line 13)");
 }
 
+// elements: auto probes the described scene (built at 16 and 8 elements): a node number on the
+// auto rod is checked against each probe's rod and named at its line in the file. (Probing copies
+// of the YAML tree named line 1.)
+TEST(SceneDescribe, AutoRodInitialNodeCheckedAgainstTheProbeNamingItsLine) {
+  EXPECT_EQ(scene_error_of("duration: 0.01\n"
+                           "rods:\n"
+                           "  - elements: auto\n"
+                           "    material: soft_cable\n"
+                           "    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], "
+                           "length: 0.3}\n"
+                           "    initial: {node_velocities: [{node: 20, velocity: [0, 0, 1]}]}\n"),
+            "rods[0].initial.node_velocities[0].node: must be <= 16, got '20' (line 6)");
+}
+
 TEST(ObstacleChecks, ValuesAScenePrimitiveMayHave) {
   Obstacle o;
   o.name = "box";
