@@ -10,7 +10,8 @@
 //       contact settings, obstacles (no rod may start inside one), grasps. Its errors are those
 //       only a built rod shows (an index out of range, a rod too long or starting inside an
 //       obstacle, two entries constraining one node); the description keeps each key's Value to
-//       name it and its line.
+//       name it and its line. (One exception reads a key again: an elements: auto rod's `initial`
+//       node and segment numbers, checked as integers against the built rod.)
 //   (c) make_automatic_choices: on the built scene, initial_state: equilibrium, then time_step:
 //       auto and integrator: auto, each logged with its reason in Scene::notes or settled. It
 //       counts work, never time, so the result depends on the scene only. elements: auto runs
