@@ -9,6 +9,7 @@
 #include "corde_sim/ros/configure.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/surface_cloud.h"
+#include "corde_sim/scene/key_ranges.h"
 
 namespace corde_sim {
 namespace {
@@ -58,11 +59,13 @@ void read(const ros::NodeHandle& pnh, const std::string& name, T& value, const T
   if (!take(x, value)) bad(name, std::string("must be ") + type_name(value));
 }
 
-double read_rate(const ros::NodeHandle& pnh, const std::string& name, double def) {
+// A number within its entry of the key-range table (scene/key_ranges.h), which ~configure and
+// the reconfigure config share: one range and one message for the parameter however it is set.
+double read_ranged(const ros::NodeHandle& pnh, const std::string& name, double def) {
   double v = def;
   read(pnh, name, v, def);
-  if (!std::isfinite(v) || v < 0.0 || v > 10000.0)
-    bad(name, "must be a rate in Hz in [0, 10000] (0 = off), got " + num(v));
+  const std::string why = start_up_range_error(name, v);
+  if (!why.empty()) throw std::invalid_argument(why);
   return v;
 }
 
@@ -98,6 +101,13 @@ void check_frame(const std::string& name, const std::string& frame, bool allow_e
 }
 
 }  // namespace
+
+std::string start_up_range_error(const std::string& name, double value) {
+  const corde::KeyRange* range = corde::find_key_range(name);
+  if (!range) throw std::logic_error("no key range for parameter ~" + name);
+  const std::string why = corde::range_violation(*range, value);
+  return why.empty() ? why : "parameter ~" + name + ": " + why;
+}
 
 GraspSource parse_grasp_source(const std::string& s) {
   if (s == "topic") return GraspSource::kTopic;
@@ -170,22 +180,18 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   check_frame("frame_prefix", p.frame_prefix, true);
   if (!p.frame_prefix.empty() && p.frame_prefix.back() != '/') p.frame_prefix += '/';
 
-  read(pnh, "real_time_factor", p.real_time_factor, 1.0);
-  if (!std::isfinite(p.real_time_factor) || p.real_time_factor < 0.0 || p.real_time_factor > 1e6)
-    bad("real_time_factor",
-        "must be >= 0 (0 = as fast as possible), got " + num(p.real_time_factor));
+  p.real_time_factor = read_ranged(pnh, "real_time_factor", 1.0);
   read(pnh, "publish_clock", p.publish_clock, false);
 
-  p.tf_rate = read_rate(pnh, "tf_rate", 50.0);
-  p.marker_rate = read_rate(pnh, "marker_rate", 20.0);
-  p.state_rate = read_rate(pnh, "state_rate", 50.0);
-  p.loop_rate = read_rate(pnh, "loop_rate", 200.0);
-  if (p.loop_rate < 1.0) bad("loop_rate", "must be >= 1 Hz");
+  p.tf_rate = read_ranged(pnh, "tf_rate", 50.0);
+  p.marker_rate = read_ranged(pnh, "marker_rate", 20.0);
+  p.state_rate = read_ranged(pnh, "state_rate", 50.0);
+  p.loop_rate = read_ranged(pnh, "loop_rate", 200.0);
   read(pnh, "tf_every_k", p.tf_every_k, 1);
   if (p.tf_every_k < 1)
     bad("tf_every_k", "must be an integer >= 1, got " + std::to_string(p.tf_every_k));
   read(pnh, "node_frames", p.node_frames, false);
-  p.cloud_rate = read_rate(pnh, "cloud_rate", 10.0);
+  p.cloud_rate = read_ranged(pnh, "cloud_rate", 10.0);
   read(pnh, "cloud_points_per_ring", p.cloud_points_per_ring, 8);
   if (p.cloud_points_per_ring < 3 || p.cloud_points_per_ring > kMaxCloudPointsPerRing)
     bad("cloud_points_per_ring", "must be an integer in [3, " +
@@ -207,18 +213,15 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
     bad("marker_style", "must be line_strip or cylinders, got '" + style + "'");
   read(pnh, "show_frames", p.show_frames, false);
   read(pnh, "color_by_strain", p.color_by_strain, true);
-  read(pnh, "marker_min_diameter", p.marker_min_diameter, 0.004);
-  if (!std::isfinite(p.marker_min_diameter) || p.marker_min_diameter < 0.0 ||
-      p.marker_min_diameter > 1.0)
-    bad("marker_min_diameter", "must be in [0, 1] m");
+  p.marker_min_diameter = read_ranged(pnh, "marker_min_diameter", 0.004);
 
   read(pnh, "max_pose_age", p.max_pose_age, 1.0);
   if (!std::isfinite(p.max_pose_age) || !(p.max_pose_age > 0.0))
     bad("max_pose_age", "must be > 0 s, got " + num(p.max_pose_age));
   p.max_frame_age = read_positive(pnh, "max_frame_age", 1.0, "s");
   p.max_grasp_distance = read_positive(pnh, "max_grasp_distance", 0.05, "m");
-  p.holder_max_speed = read_positive(pnh, "holder_max_speed", 2.0, "m/s");
-  p.holder_max_acceleration = read_positive(pnh, "holder_max_acceleration", 50.0, "m/s^2");
+  p.holder_max_speed = read_ranged(pnh, "holder_max_speed", 2.0);
+  p.holder_max_acceleration = read_ranged(pnh, "holder_max_acceleration", 50.0);
   p.holder_max_angular_speed = read_positive(pnh, "holder_max_angular_speed", 20.0, "rad/s");
   p.holder_max_angular_acceleration =
       read_positive(pnh, "holder_max_angular_acceleration", 1000.0, "rad/s^2");

@@ -18,6 +18,9 @@ BAD = [
     (["_real_time_factor:=-1.0"], "real_time_factor"),
     (["_tf_rate:=-5.0"], "tf_rate"),
     (["_tf_rate:=fast"], "tf_rate"),  # wrong type
+    # Beyond the key-range table's 1000 Hz, worded as ~configure words it.
+    (["_tf_rate:=5000.0"],
+     "parameter ~tf_rate: must be <= 1000 Hz, got 5000 (valid: [0, 1000] Hz)"),
     (["_tf_every_k:=2.5"], "tf_every_k"),  # not an integer
     (["_show_frames:=maybe"], "show_frames"),  # not a bool
     (["_max_pose_age:=0.0"], "max_pose_age"),

@@ -84,6 +84,12 @@ struct NodeParams {
   double contact_force_scale = 0.05;  // m/N
 };
 
+// "" when `value` lies in the range of parameter ~`name` in the key-range table
+// (scene/key_ranges.h, shared with ~configure and cfg/Node.cfg); otherwise "parameter ~<name>: "
+// and range_violation()'s reason, as ~configure words it. Throws std::logic_error for a name the
+// table lacks.
+std::string start_up_range_error(const std::string& name, double value);
+
 // Parses "topic" | "tf" | "fixed"; throws std::invalid_argument otherwise.
 GraspSource parse_grasp_source(const std::string& s);
 const char* to_string(GraspSource s);

@@ -1,7 +1,8 @@
 // The valid ranges of the keys a user sets by value, in one table so that no two checks disagree:
 // the rod keys (rods[i].material, radius, drag; docs/scene_format.md), which the scene reader and
 // the node's ~configure check with one message (docs/ros_interface.md), and the node's
-// dynamic_reconfigure parameters (cfg/Node.cfg, whose generated ranges a unit test compares).
+// dynamic_reconfigure parameters (cfg/Node.cfg, whose generated ranges a unit test compares),
+// which its start-up parameters of the same names (and ~loop_rate) are checked against too.
 #pragma once
 
 #include <string>

@@ -51,7 +51,8 @@ const std::vector<KeyRange>& key_ranges() {
       {"drag_coefficient", 0.0, B::max_factor, true, "", "the cylinder's normal drag coefficient"},
       {"friction_coefficient", 0.0, B::max_factor, true, "", "its tangential skin friction"},
       // The node's dynamic_reconfigure parameters (cfg/Node.cfg declares the same ranges; a unit
-      // test keeps the generated NodeConfig equal to these).
+      // test keeps the generated NodeConfig equal to these); the node's start-up parameters of
+      // the same names are checked against them too (ros/node_params.h).
       {"real_time_factor", 0.0, 1000.0, true, "", "simulated time per wall-clock time (0: fast)"},
       {"tf_rate", 0.0, 1000.0, true, "Hz", "rate of the segment tf frames (0: none)"},
       {"marker_rate", 0.0, 1000.0, true, "Hz", "rate of the rviz markers (0: none)"},
@@ -60,6 +61,9 @@ const std::vector<KeyRange>& key_ranges() {
       {"holder_max_speed", 0.01, 100.0, true, "m/s", "fastest a grasp holder follows its pose"},
       {"holder_max_acceleration", 0.1, 10000.0, true, "m/s^2",
        "largest acceleration of a grasp holder"},
+      // Start-up parameters only (not reconfigurable); the same upper bound as the other rates.
+      {"loop_rate", 1.0, 1000.0, true, "Hz", "wake-ups of the node's paced loop"},
+      {"cloud_rate", 0.0, 1000.0, true, "Hz", "rate of the surface point cloud (0: none)"},
   };
   return table;
 }

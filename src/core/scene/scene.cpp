@@ -75,13 +75,18 @@ LoadDescription describe_load(const Value& entry) {
   return d;
 }
 
+[[noreturn]] void fail_total(const Value& key, long total) {
+  key.fail("the scene's rods would have " + std::to_string(total) +
+           " elements together, more than the limit of " +
+           std::to_string(SceneLimits::max_total_elements));
+}
+
 // A rod's own keys (RodDescription), after the rods `before` it.
 RodDescription describe_rod(const Value& v, int index, const std::vector<RodDescription>& before,
-                            const std::optional<Value>& default_state) {
+                            const std::optional<Value>& default_state, const std::string& base) {
   RodDescription r;
   r.path = v.path();
-  r.map.emplace(v);
-  Map& m = *r.map;
+  Map m(v);
   RodSpec& spec = r.spec;
   spec.name = "rod" + std::to_string(index);
   if (auto p = m.find("name")) {
@@ -92,16 +97,19 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
         p->fail("duplicate rod name " + echo(spec.name) + " (also " + b.path + ")");
   }
   std::optional<Value> elements = m.find("elements");
-  if (elements) spec.elements = elements->integer(1, SceneLimits::max_elements);
+  r.elements_key = elements ? *elements : v;
+  if (elements && elements->is_scalar() && elements->node().Scalar() == "auto") {
+    r.auto_elements = true;  // counted once chosen (scene_elements.h)
+    spec.elements = 0;
+  } else if (elements) {
+    spec.elements = elements->integer(1, SceneLimits::max_elements);
+  }
   long total = spec.elements;
   for (const RodDescription& b : before) total += b.spec.elements;
-  if (total > SceneLimits::max_total_elements)
-    (elements ? *elements : v)
-        .fail("the scene's rods would have " + std::to_string(total) +
-              " elements together, more than the limit of " +
-              std::to_string(SceneLimits::max_total_elements));
+  if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
   spec.section = read_section(&m);
-  spec.shape = read_shape(m.get("shape"));
+  r.shape_key = m.get("shape");
+  spec.shape = read_shape(*r.shape_key);
   if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
   if (auto p = m.find("rest_shape"))
     spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
@@ -119,20 +127,75 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
                   "perturbation) or set initial_state: given on the rod");
     r.equilibrium = state;
   }
+  if (auto i = m.find("initial"))
+    r.initial = describe_initial(*i, r.auto_elements ? -1 : spec.elements);
+  if (auto b = m.find("boundary"))
+    for (const Value& item : limited_items(*b, SceneLimits::max_items, "entries"))
+      r.boundary.push_back(describe_boundary(item, base));
   if (auto l = m.find("loads"))
     for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
       r.loads.push_back(describe_load(item));
+  // A number >= 1, or auto (stability/explicit_step_limit.h, lifting_inertia_scale: computed on
+  // the rod as built and held).
+  if (auto p = m.find("rotational_inertia_scale")) {
+    if (p->is_scalar() && p->node().Scalar() == "auto") {
+      r.inertia_scale_auto = p->path();
+    } else {
+      const double scale = p->number();
+      if (!(scale >= 1.0))
+        p->fail("must be >= 1 (1 = physical rotary inertia) or auto, got " + num(scale));
+      p->within(1.0, SceneBounds::max_factor, "");
+      r.inertia_scale = scale;
+    }
+  }
+  m.finish();
   return r;
 }
 
 }  // namespace
 
+// The items of a list, failing when there are more than `limit` of them.
+std::vector<Value> limited_items(const Value& list, int limit, const char* what) {
+  if (list.is_sequence() && list.node().size() > static_cast<size_t>(limit))
+    list.fail("has " + std::to_string(list.node().size()) + " " + what +
+              ", more than the limit of " + std::to_string(limit));
+  return list.items();
+}
+
+IndexRef describe_index(const Value& v, const char* what) {
+  IndexRef ref;
+  ref.key = v;
+  if (v.is_scalar() && v.node().Scalar() == "start") return ref;
+  ref.kind = IndexRef::Kind::kEnd;
+  if (v.is_scalar() && v.node().Scalar() == "end") return ref;
+  if (!v.is_scalar()) v.fail(std::string("expected a ") + what + " index, start or end");
+  ref.kind = IndexRef::Kind::kIndex;
+  try {
+    ref.index = v.node().as<double>();
+  } catch (const YAML::Exception&) {
+    v.fail(std::string("expected a ") + what + " index, start or end, got " + v.describe());
+  }
+  return ref;
+}
+
+// `initial_state`: given (the shape and velocities as described) or equilibrium.
+bool wants_equilibrium(const Value& v) {
+  return v.choice({"given", "equilibrium"}) == "equilibrium";
+}
+
+void check_total_elements(const std::vector<RodDescription>& rods) {
+  long total = 0;
+  for (const RodDescription& r : rods) {
+    total += r.spec.elements;
+    if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
+  }
+}
+
 SceneDescription describe_scene(const YAML::Node& root, const std::string& source) {
   SceneDescription d;
   d.source = source;
   d.name = source == "<string>" ? "scene" : stem(source);
-  d.top.emplace(Value(root, ""));
-  Map& top = *d.top;
+  Map top(Value(root, ""));
   if (auto v = top.find("name")) d.name = v->string();
   if (auto v = top.find("description")) d.description = v->string();
   if (auto v = top.find("gravity")) d.gravity = v->vec3(SceneBounds::max_acceleration, "m/s^2");
@@ -149,9 +212,16 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
                                                              : Scene::Mode::kDynamics;
   if (auto v = top.find("statics_time"))
     d.statics_time = v->non_negative(SceneBounds::max_time, "s");
-  if (auto v = top.find("shape_tolerance")) {  // without elements: auto (which consumes it)
-    v->positive();
-    d.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+  if (auto v = top.find("shape_tolerance")) {
+    if (has_auto_elements(root)) {
+      d.shape_tolerance = v->number();
+      if (!(*d.shape_tolerance >= kMinShapeTolerance && *d.shape_tolerance <= kMaxShapeTolerance))
+        v->fail("must be in [" + num(kMinShapeTolerance) + ", " + num(kMaxShapeTolerance) +
+                "] (a fraction of the rod's length), got " + num(*d.shape_tolerance));
+    } else {
+      v->positive();
+      d.warnings.push_back("shape_tolerance: has no effect without a rod's elements: auto");
+    }
   }
   std::optional<Value> step = top.find("time_step");
   if (step && !(step->is_scalar() && step->node().Scalar() == "auto")) {
@@ -170,10 +240,20 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
   const std::optional<Value> default_state = top.find("initial_state");
   if (default_state) wants_equilibrium(*default_state);  // checks the value
   for (size_t i = 0; i < items.size(); ++i)
-    d.rods.push_back(describe_rod(items[i], static_cast<int>(i), d.rods, default_state));
-  d.contact = top.find("contact");
-  d.obstacles = top.find("obstacles");
-  d.grasps = top.find("grasps");
+    d.rods.push_back(describe_rod(items[i], static_cast<int>(i), d.rods, default_state, d.base));
+  if (auto v = top.find("contact")) {
+    d.contact = ContactSettings();
+    read_contact_settings(*v, &*d.contact);
+  }
+  if (auto v = top.find("obstacles")) {
+    ObstaclesDescription& o = d.obstacles.emplace();
+    read_obstacles(*v, &o.obstacles, &o.motions, d.base, &o.paths);
+    check_obstacle_placement(o.obstacles, o.paths);
+  }
+  if (auto v = top.find("grasps"))
+    for (const Value& item : limited_items(*v, SceneLimits::max_grasps, "grasps"))
+      d.grasps.push_back(describe_grasp(item, d.rods, d.grasps, d.base));
+  top.finish();
   return d;
 }
 
@@ -181,11 +261,10 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
 
 namespace {
 
-// The three passes on a tree whose overrides are applied and whose elements are counts.
-Scene load_tree(const YAML::Node& root, const std::string& source) {
-  scene_detail::SceneDescription description = scene_detail::describe_scene(root, source);
+// Passes (b) and (c) on a description whose rods all have their element counts.
+Scene build_description(const scene_detail::SceneDescription& description) {
   scene_detail::AutomaticRequests requests;
-  Scene scene = scene_detail::build_scene(&description, &requests);
+  Scene scene = scene_detail::build_scene(description, &requests);
   scene_detail::make_automatic_choices(&scene, requests);
   return scene;
 }
@@ -210,12 +289,12 @@ Scene parse_scene(const std::string& yaml_text, const std::vector<std::string>& 
   if (!root.IsDefined() || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   const std::vector<std::string> set = scene_detail::apply_overrides(&root, overrides);
   try {
-    // elements: auto first: it probes the scene (passes a to c) at two resolutions per choice.
-    std::vector<std::string> notes;
-    if (scene_detail::has_auto_elements(root))
-      notes = scene_detail::choose_elements(
-          &root, [&](const YAML::Node& tree) { return load_tree(tree, source); });
-    Scene scene = load_tree(root, source);
+    scene_detail::SceneDescription description = scene_detail::describe_scene(root, source);
+    // elements: auto: probe builds (passes b and c) of the description at two resolutions per
+    // choice.
+    const std::vector<std::string> notes =
+        scene_detail::choose_elements(&description, build_description);
+    Scene scene = build_description(description);
     scene.notes.insert(scene.notes.begin(), notes.begin(), notes.end());
     return scene;
   } catch (const SceneError& e) {

@@ -5,8 +5,8 @@
 #include <map>
 #include <optional>
 
-#include "corde_sim/contact/obstacle_checks.h"
 #include "corde_sim/contact/urdf_obstacles.h"
+#include "corde_sim/scene/obstacle_checks.h"
 #include "scene_reader.h"
 
 namespace corde {
@@ -123,17 +123,24 @@ std::map<std::string, std::shared_ptr<const Motion>> read_joint_motions(
 
 }  // namespace
 
-void read_obstacles(const Value& list, World* world, const std::string& base,
+void read_obstacles(const Value& list, std::vector<Obstacle>* obstacles,
+                    std::vector<ObstacleMotion>* motions, const std::string& base,
                     std::vector<std::string>* paths) {
   if (!list.is_sequence()) list.fail("expected a list of obstacles, got " + list.describe());
   if (list.node().size() > static_cast<size_t>(SceneLimits::max_items))
     list.fail("has " + std::to_string(list.node().size()) + " obstacles, more than the limit of " +
               std::to_string(SceneLimits::max_items));
-  if (!world->obstacles) world->obstacles = std::make_shared<ObstacleSet>();
+  // Each obstacle as an ObstacleSet accepts it (the set is the judge of its shape and pose).
+  ObstacleSet set;
+  auto add_obstacle = [&](const Obstacle& o, const Value& where) {
+    const int i = add(&set, o, where);
+    obstacles->push_back(o);
+    return i;
+  };
   // The entry of each obstacle added (a URDF adds several).
   std::string last;
   auto note = [&] {
-    if (paths) paths->resize(static_cast<size_t>(world->obstacles->size()), last);
+    if (paths) paths->resize(static_cast<size_t>(set.size()), last);
   };
   int index = 0;
   for (const Value& item : list.items()) {
@@ -210,7 +217,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
         o.friction = friction;
         // Marked moving by the URDF (behind a movable joint) only if asked to or driven.
         o.moving = moving || motion || follows_joints;
-        const int i = add(world->obstacles.get(), o, item);
+        const int i = add_obstacle(o, item);
         if (!driven) continue;
         ObstacleMotion om;
         om.obstacle = i;
@@ -227,7 +234,7 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
               return q;
             });
           };
-        if (motion || follows_joints) world->obstacle_motions.push_back(std::move(om));
+        if (motion || follows_joints) motions->push_back(std::move(om));
       }
       continue;
     }
@@ -257,31 +264,33 @@ void read_obstacles(const Value& list, World* world, const std::string& base,
     const std::shared_ptr<const Motion> motion = read_obstacle_motion(&m, o.pose, base);
     o.moving = moving || keyframed(motion != nullptr);
     m.finish();
-    const int i = add(world->obstacles.get(), o, item);
+    const int i = add_obstacle(o, item);
     if (motion) {
       ObstacleMotion om;
       om.obstacle = i;
       om.motion = motion;
       om.start = o.pose;
-      world->obstacle_motions.push_back(std::move(om));
+      motions->push_back(std::move(om));
     }
   }
   note();
 }
 
-void check_obstacles_at_start(const World& world, const std::vector<std::string>& obstacle_paths,
-                              const std::vector<std::string>& rod_paths) {
-  if (!world.obstacles || world.obstacles->size() == 0) return;
+void check_obstacle_placement(const std::vector<Obstacle>& obstacles,
+                              const std::vector<std::string>& paths) {
   // Every obstacle as placed (URDF links too, posed through their chains): far beyond the bounds
   // of the scene's keys, the geometry queries fail ("too many iterations in Jacobi transform").
-  for (int i = 0; i < world.obstacles->size(); ++i) {
-    const std::string far =
-        check_placed_extent(world.obstacles->obstacle(i), SceneBounds::max_placed_length);
-    if (!far.empty())
-      throw SceneError((static_cast<size_t>(i) < obstacle_paths.size() ? obstacle_paths[i]
-                                                                       : std::string("obstacles")) +
-                       ": " + far);
+  for (size_t i = 0; i < obstacles.size(); ++i) {
+    const std::string why = obstacle_placement_error(obstacles[i]);
+    if (!why.empty())
+      throw SceneError((i < paths.size() ? paths[i] : std::string("obstacles")) + ": " + why);
   }
+}
+
+void check_rods_clear_of_obstacles(const World& world,
+                                   const std::vector<std::string>& obstacle_paths,
+                                   const std::vector<std::string>& rod_paths) {
+  if (!world.obstacles || world.obstacles->size() == 0) return;
   std::vector<SegmentContact> found;
   std::vector<int> which;
   for (size_t r = 0; r < world.rods().size(); ++r) {

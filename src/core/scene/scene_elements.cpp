@@ -10,6 +10,7 @@
 #include "corde_sim/integrators/integrator_names.h"
 #include "corde_sim/scene/scene_runner.h"
 #include "corde_sim/stability/explicit_step_limit.h"
+#include "scene_passes.h"
 #include "scene_reader.h"
 
 namespace corde {
@@ -23,14 +24,10 @@ constexpr double kProbeBudget = 1e7;
 bool is_auto(const YAML::Node& n) { return n && n.IsScalar() && n.Scalar() == "auto"; }
 
 // A node or segment given by number on an auto rod means a different place at every resolution.
-void refuse_numeric_index(const YAML::Node& entry, const std::string& path, const char* key,
-                          const std::string& rod_path) {
-  if (!entry.IsMap() || !entry[key] || !entry[key].IsScalar()) return;
-  const std::string& s = entry[key].Scalar();
-  if (s == "start" || s == "end") return;
-  Value(entry[key], path + "." + key)
-      .fail(std::string("a ") + key + " index needs a fixed element count (" + rod_path +
-            ".elements is auto); use start or end, or give elements");
+void refuse_numeric_index(const IndexRef& at, const char* key, const std::string& rod_path) {
+  if (at.kind != IndexRef::Kind::kIndex) return;
+  at.key.fail(std::string("a ") + key + " index needs a fixed element count (" + rod_path +
+              ".elements is auto); use start or end, or give elements");
 }
 
 struct AutoRod {
@@ -114,21 +111,27 @@ struct Probe {
   RunResult result;
 };
 
-Probe run_probe(const YAML::Node& root, const std::vector<AutoRod>& rods, int n,
+Probe run_probe(const SceneDescription& description, const std::vector<AutoRod>& rods, int n,
                 const SceneBuilder& build, const Scene* like) {
-  YAML::Node tree = YAML::Clone(root);
-  for (const AutoRod& r : rods) tree["rods"][r.index]["elements"] = n;
+  SceneDescription d = description;
+  for (const AutoRod& r : rods) d.rods[r.index].spec.elements = n;
+  // The given time step, or one set for a probe (its key: a number, as if the file gave it).
+  auto set_step = [&](double h) {
+    d.time_step = h;
+    d.time_step_key = Value(YAML::Node(h), "time_step");
+  };
   if (like) {  // the same step and method as the finer probe, so that only N differs
-    tree["time_step"] = like->world.time_step;
-    tree["integrator"] = integrator_name(like->world.integrator);
+    set_step(like->world.time_step);
+    d.integrator = like->world.integrator;
+    d.integrator_auto = false;
   }
-  Probe p{build(tree), {}, {}};
+  Probe p{build(d), {}, {}};
   // A given step the explicit method cannot take at the finer probe's resolution: its stable one.
   const double limit = explicit_step_limit(p.scene.world, false).time_step;
   if (!like && has_explicit_step_limit(p.scene.world.integrator) &&
       p.scene.world.time_step > limit && limit > 0.0) {
-    tree["time_step"] = 0.8 * limit;
-    p.scene = build(tree);
+    set_step(0.8 * limit);
+    p.scene = build(d);
   }
   const double h = p.scene.world.time_step;
   long elements = 0;
@@ -167,44 +170,27 @@ bool has_auto_elements(const YAML::Node& root) {
   return false;
 }
 
-std::vector<std::string> choose_elements(YAML::Node* root, const SceneBuilder& build) {
-  double tolerance = kDefaultShapeTolerance;
-  if (YAML::Node t = (*root)["shape_tolerance"]) {
-    const Value v(t, "shape_tolerance");
-    tolerance = v.number();
-    if (!(tolerance >= kMinShapeTolerance && tolerance <= kMaxShapeTolerance))
-      v.fail("must be in [" + num(kMinShapeTolerance) + ", " + num(kMaxShapeTolerance) +
-             "] (a fraction of the rod's length), got " + num(tolerance));
-    root->remove("shape_tolerance");
-  }
+std::vector<std::string> choose_elements(SceneDescription* d, const SceneBuilder& build) {
   std::vector<AutoRod> rods;
-  const YAML::Node list = (*root)["rods"];
-  for (size_t i = 0; i < list.size(); ++i) {
-    const YAML::Node r = list[i];
-    if (!r.IsMap() || !is_auto(r["elements"])) continue;
-    const std::string path = "rods[" + std::to_string(i) + "]";
-    std::string name = "rod" + std::to_string(i);
-    if (r["name"] && r["name"].IsScalar()) name = r["name"].Scalar();
-    for (const char* key : {"boundary", "loads"})
-      if (r[key] && r[key].IsSequence())
-        for (size_t j = 0; j < r[key].size(); ++j)
-          for (const char* item : {"node", "segment"})
-            refuse_numeric_index(r[key][j], path + "." + key + "[" + std::to_string(j) + "]", item,
-                                 path);
-    const YAML::Node grasps = (*root)["grasps"];
-    if (grasps && grasps.IsSequence())
-      for (size_t j = 0; j < grasps.size(); ++j) {
-        const YAML::Node g = grasps[j];
-        const bool on_rod =
-            g.IsMap() &&
-            (g["rod"] ? g["rod"].IsScalar() && g["rod"].Scalar() == name : list.size() == 1);
-        if (on_rod && g["place"] && g["place"].IsScalar() && g["place"].Scalar() == "node")
-          Value(g["value"], "grasps[" + std::to_string(j) + "].value")
-              .fail("a node index needs a fixed element count (" + path +
-                    ".elements is auto); use place: arc_length, start or end, or give elements");
-      }
-    rods.push_back({static_cast<int>(i), name});
+  for (size_t i = 0; i < d->rods.size(); ++i) {
+    const RodDescription& r = d->rods[i];
+    if (!r.auto_elements) continue;
+    for (const BoundaryDescription& b : r.boundary)
+      if (b.kind != BoundaryDescription::Kind::kClamp)
+        refuse_numeric_index(b.at, b.kind == BoundaryDescription::Kind::kNode ? "node" : "segment",
+                             r.path);
+    for (const LoadDescription& l : r.loads)
+      refuse_numeric_index(l.at, l.load.kind == Load::Kind::kForce ? "node" : "segment", r.path);
+    for (const GraspDescription& g : d->grasps)
+      if (g.rod == static_cast<int>(i) && g.spec.place == GraspSpec::Place::kNode &&
+          g.node.kind == IndexRef::Kind::kIndex)
+        g.node.key.fail("a node index needs a fixed element count (" + r.path +
+                        ".elements is auto); use place: arc_length, start or end, or give "
+                        "elements");
+    rods.push_back({static_cast<int>(i), r.spec.name});
   }
+  if (rods.empty()) return {};
+  const double tolerance = d->shape_tolerance ? *d->shape_tolerance : kDefaultShapeTolerance;
 
   // Probe pairs (N/2, N) until every rod's estimate lies within 2N or N reaches the cap.
   struct Choice {
@@ -216,8 +202,8 @@ std::vector<std::string> choose_elements(YAML::Node* root, const SceneBuilder& b
   int fine = 16;
   Probe f, c;
   for (;;) {
-    f = run_probe(*root, rods, fine, build, nullptr);
-    c = run_probe(*root, rods, fine / 2, build, &f.scene);
+    f = run_probe(*d, rods, fine, build, nullptr);
+    c = run_probe(*d, rods, fine / 2, build, &f.scene);
     int next = fine;
     for (size_t k = 0; k < rods.size(); ++k) {
       const Rod& rf = f.scene.world.rods()[rods[k].index];
@@ -255,7 +241,7 @@ std::vector<std::string> choose_elements(YAML::Node* root, const SceneBuilder& b
   std::vector<std::string> notes;
   for (size_t k = 0; k < rods.size(); ++k) {
     const Choice& ch = choices[k];
-    (*root)["rods"][rods[k].index]["elements"] = ch.elements;
+    d->rods[rods[k].index].spec.elements = ch.elements;
     const double at = ch.error * std::pow(static_cast<double>(fine) / ch.elements, ch.order);
     char observed[120] = "";
     if (!std::isnan(ch.observed))
@@ -278,6 +264,7 @@ std::vector<std::string> choose_elements(YAML::Node* root, const SceneBuilder& b
         ch.elements > 4 * fine ? " (extrapolated far beyond the probes)" : "");
     notes.push_back(buf);
   }
+  check_total_elements(d->rods);
   return notes;
 }
 

@@ -1,29 +1,34 @@
 // Internal to the scene loader: the three passes of parse_scene() (docs/architecture.md, "Scene
 // loading").
-//   (a) describe_scene: the YAML tree (overrides applied) into a SceneDescription: the top-level
-//       settings, each rod's own keys (name, elements, material, shape, drag, contact, initial
-//       state, loads with their node or segment unresolved) and what the scene asks of the
-//       automatic pass, read and validated; nothing built.
-//   (b) build_scene: the rods built from their descriptions, then the entries that need a built
-//       rod, read in file order against the rods built before them (node and segment indices,
-//       `end`, keyframes given as absolute poses and arc lengths): each rod's initial velocities,
-//       boundary, loads (indices resolved) and rotational_inertia_scale, then contact settings,
-//       obstacles, grasps.
+//   (a) describe_scene: the YAML tree (overrides applied) into a SceneDescription, every key read
+//       and checked, nothing built: the top-level settings; each rod's own keys, initial state,
+//       boundary and loads; contact settings, obstacles (placed as read: they depend on no rod)
+//       and grasps. What needs a built rod stays unresolved: node and segment indices (IndexRef),
+//       keyframes given as absolute poses (MotionDescription), a grasp's arc length.
+//   (b) build_scene: the world from the description alone (no key is read): each rod built, then
+//       its initial velocities, boundary, loads (indices resolved) and rotational_inertia_scale;
+//       contact settings, obstacles (no rod may start inside one), grasps. Its errors are those
+//       only a built rod shows (an index out of range, a rod too long or starting inside an
+//       obstacle, two entries constraining one node); the description keeps each key's Value to
+//       name it and its line. (One exception reads a key again: an elements: auto rod's `initial`
+//       node and segment numbers, checked as integers against the built rod.)
 //   (c) make_automatic_choices: on the built scene, initial_state: equilibrium, then time_step:
 //       auto and integrator: auto, each logged with its reason in Scene::notes or settled. It
-//       counts work, never time, so the result depends on the scene only. (elements: auto runs
-//       before (b): it rewrites the tree after probe runs of (b) and (c) at two resolutions,
-//       scene_elements.h.)
-// A file with one error gives the same error as when the loader read and built in one go; of
-// several errors in different rods, the first in pass (a) is reported.
+//       counts work, never time, so the result depends on the scene only. elements: auto runs
+//       between (a) and (b): it sets the rods' counts in the description after probe builds
+//       (b, c) of it at two resolutions (scene_elements.h).
+// Of several errors in a file, the first in pass (a) (in file order) is reported.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "corde_sim/grasp/grasp.h"
 #include "corde_sim/model/loads.h"
 #include "corde_sim/scene/scene.h"
 #include "scene_reader.h"
@@ -59,18 +64,63 @@ struct LoadDescription {
   IndexRef at;       // the node (force) or segment (torque)
 };
 
+// A `boundary` entry (scene_boundary.cpp): its node or segment unresolved, its drive's keyframes
+// not yet placed at the rod's start.
+struct BoundaryDescription {
+  std::string path;  // "rods[0].boundary[1]"
+  enum class Kind { kNode, kSegment, kClamp } kind = Kind::kNode;
+  IndexRef at;  // kNode, kSegment: the node or segment (its key names it in messages)
+  // kNode: fix, velocity, line, plane or motion; kSegment: fix, spin_rate, free_axis or motion.
+  std::string mode;
+  Vec3 direction = Vec3::Zero();  // line, plane, free_axis (not tangent), a clamp's slide axis
+  bool along_tangent = false;     // free_axis: tangent, slide: true
+  Vec3 velocity = Vec3::Zero();   // m/s
+  double rate = 0.0;              // rad/s (spin_rate)
+  double start_time = 0.0;        // s (velocity, spin_rate)
+  std::optional<MotionDescription> motion;
+  // kClamp: which end and how it holds.
+  std::optional<Value> clamp_key;
+  bool end = false, natural = false, twist_free = false, slides = false;
+};
+
+// A grasp entry (scene_grasps.cpp): its rod found by name, its node unresolved, its keyframes not
+// yet placed at the held segment.
+struct GraspDescription {
+  std::optional<Value> entry;  // for messages naming the entry
+  GraspSpec spec;              // all but value (node, arc length), motion, motion_reference
+  int rod = 0;                 // index in the scene's rods
+  IndexRef node;               // place: node
+  std::optional<Value> arc_length_key;
+  std::optional<MotionDescription> motion;
+};
+
 // A rod's own keys, read in pass (a).
 struct RodDescription {
   std::string path;  // "rods[0]"
   RodSpec spec;      // name, elements, section (material, radius), shape, reference_d1, rest_shape
+  // elements: auto: spec.elements is 0 until choose_elements() sets it (scene_elements.h).
+  bool auto_elements = false;
+  std::optional<Value> elements_key;
+  std::optional<Value> shape_key;  // names the shape when the built rod's length is out of range
   std::optional<Drag> drag;
   std::optional<ContactOptions> contact;
   std::optional<Value> equilibrium;  // the initial_state key that asks for it (the rod's or the
                                      // scene's)
+  std::optional<InitialDescription> initial;
+  std::vector<BoundaryDescription> boundary;
   std::vector<LoadDescription> loads;
-  // Its map: pass (b) reads initial, boundary and rotational_inertia_scale from it, then refuses
-  // unknown keys.
-  std::optional<Map> map;
+  // rotational_inertia_scale: a number, or auto (computed on the built rod, noted under its key).
+  std::optional<double> inertia_scale;
+  std::optional<std::string> inertia_scale_auto;  // the key's path
+};
+
+// The obstacles of the scene (scene_contact.cpp): placed and keyframed as read, since they depend
+// on no rod, and accepted by an ObstacleSet once; pass (b) adds them to a new set of the world
+// (each build its own: a run moves them) and checks that no rod starts inside one.
+struct ObstaclesDescription {
+  std::vector<Obstacle> obstacles;
+  std::vector<ObstacleMotion> motions;
+  std::vector<std::string> paths;  // the entry ("obstacles[2]") of each obstacle
 };
 
 // Pass (a)'s result.
@@ -86,16 +136,40 @@ struct SceneDescription {
   double statics_time = 0.0;        // s
   std::optional<double> time_step;  // s; none: time_step: auto
   std::optional<Value> time_step_key;
+  std::optional<double> shape_tolerance;  // given with a rod's elements: auto
   std::vector<std::string> warnings;
   std::vector<RodDescription> rods;  // at least one, at most SceneLimits::max_rods
-  // The entries pass (b) reads: contact settings, obstacles, grasps.
-  std::optional<Value> contact, obstacles, grasps;
-  // The top-level map, whose unknown keys pass (b) refuses once every entry is read.
-  std::optional<Map> top;
+  std::optional<ContactSettings> contact;
+  std::optional<ObstaclesDescription> obstacles;
+  std::vector<GraspDescription> grasps;
+};
+
+// Which entry constrains each node and segment of a rod, to reject conflicting constraints
+// (pass b, where the indices are resolved).
+struct Owners {
+  std::map<int, std::string> node, segment;
+  std::string ghost[2];
+
+  void claim(std::map<int, std::string>* owners, int index, const char* what, const Value& v,
+             const std::string& owner);
 };
 
 SceneDescription describe_scene(const YAML::Node& root, const std::string& source);
-Scene build_scene(SceneDescription* description, AutomaticRequests* requests);
+Scene build_scene(const SceneDescription& description, AutomaticRequests* requests);
+// The rods' elements together within SceneLimits::max_total_elements; fails naming the elements
+// key of the rod that crosses it.
+void check_total_elements(const std::vector<RodDescription>& rods);
+
+// A `boundary` entry, and its drives and constraints on the built rod, recorded as a support
+// (scene_boundary.cpp).
+BoundaryDescription describe_boundary(const Value& entry, const std::string& base);
+void build_boundary(const BoundaryDescription& d, Rod* rod, Owners* owners, Support* support);
+// A `grasps` entry, its rod looked up among `rods` by name, its name unique among `before`; and
+// the grasp on the built rod, its nodes (and segment) claimed in `owners` (scene_grasps.cpp).
+GraspDescription describe_grasp(const Value& v, const std::vector<RodDescription>& rods,
+                                const std::vector<GraspDescription>& before,
+                                const std::string& base);
+GraspSpec build_grasp(const GraspDescription& d, const Rod& rod, Owners* owners);
 void make_automatic_choices(Scene* scene, const AutomaticRequests& requests);
 
 // The items of a list, failing when there are more than `limit` of them.

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <set>
@@ -105,7 +106,9 @@ RodShape read_shape(const Value& v);
 // ("" for a scene given as text: the current directory).
 std::string resolve_path(const std::string& base, const std::string& path);
 
-// Where a driven item starts, for keyframes given as absolute poses, and what it may do.
+// Where a driven item starts, for keyframes given as absolute poses, and what it may do. Describing
+// a motion reads the rules (translates, rotates, time, time_key); resolving it reads the pose
+// (position, orientation, tangent), which for a rod's item is known once the rod is built.
 struct MotionStart {
   Vec3 position = Vec3::Zero();
   Quat orientation = Quat::Identity();
@@ -116,27 +119,93 @@ struct MotionStart {
   double time = 0.0;
   const char* time_key = "grasp_time";
 };
+
+// A keyframe as the file gives it: the channels it sets, absolute ones not yet relative to the
+// start. A keyframe file's row may set single components (x without y).
+struct KeyframeDescription {
+  double time = 0.0;  // s, absolute (not yet since the motion's start)
+  std::array<bool, 3> position_given{}, displacement_given{};
+  Vec3 position = Vec3::Zero(), displacement = Vec3::Zero();  // m
+  bool has_orientation = false, has_angle = false;
+  Quat orientation = Quat::Identity();  // unit
+  double angle = 0.0;                   // rad (turns)
+  bool translates_absolute() const {
+    return position_given[0] || position_given[1] || position_given[2];
+  }
+  bool translates_relative() const {
+    return displacement_given[0] || displacement_given[1] || displacement_given[2];
+  }
+};
+
+// A keyframed drive, read and checked (describe_motion) but not yet placed at its item's start
+// (resolve_motion): keyframes, or move_by/turns over ramp_time from start_time.
+struct MotionDescription {
+  std::string path;  // the entry's
+  Motion::Interpolation interpolation = Motion::Interpolation::kSmooth;
+  bool keyframed = false;
+  // Keyframes: the frames, and where each comes from for messages (the list items, or the file's
+  // "'FILE' line N" under the keyframes key).
+  std::vector<KeyframeDescription> frames;
+  bool from_file = false;
+  std::optional<Value> keyframes_key;
+  std::vector<Value> items;
+  std::vector<std::string> where_from;
+  // move_by/turns.
+  Vec3 move_by = Vec3::Zero();
+  double angle = 0.0, ramp_time = 0.0, start_time = 0.0;  // rad, s, s (absolute)
+
+  // Throws SceneError naming keyframe k where it comes from.
+  [[noreturn]] void fail_at(size_t k, const std::string& why) const;
+};
 // Whether the entry has any of the keys of a keyframed drive (keyframes, move_by, turns,
 // ramp_time, interpolation).
 bool has_motion(const Map& m);
-// The keyframed drive of an entry (keyframes, or move_by/turns over ramp_time from start_time),
-// or null when it has none (scene_motion.cpp). Keyframe files are read relative to `base`.
+// The keyframed drive of an entry, read and checked against `start`'s rules, or none when it has
+// none (scene_motion.cpp). Keyframe files are read relative to `base`.
+std::optional<MotionDescription> describe_motion(Map* m, const MotionStart& start,
+                                                 const std::string& base);
+// The drive placed at `start`'s pose (the rules as described); fails naming a keyframe the motion
+// refuses.
+std::shared_ptr<const Motion> resolve_motion(const MotionDescription& d, const MotionStart& start);
+// Both at once, for items whose start is known while reading (obstacles).
 std::shared_ptr<const Motion> read_motion(Map* m, const MotionStart& start,
                                           const std::string& base);
-// A rod's `initial` key: velocities, spins, a seeded perturbation (scene_motion.cpp).
-void read_initial(const Value& v, Rod* rod);
 
-// The top-level `obstacles` list into world->obstacles (URDF files relative to `base`), the
-// top-level `contact` settings, and a rod's `contact` options (scene_contact.cpp).
-// `paths` (optional) receives the entry's path ("obstacles[2]") of each obstacle added.
-void read_obstacles(const Value& list, World* world, const std::string& base,
+// A rod's `initial` key (velocities, spins, a seeded perturbation), read for a rod of `segments`
+// segments (-1: elements: auto, its node and segment numbers checked against the built rod), then
+// applied to the built rod (scene_motion.cpp).
+struct InitialDescription {
+  struct Indexed {
+    int index = 0;
+    Vec3 value = Vec3::Zero();      // m/s or rad/s (world frame)
+    std::optional<Value> deferred;  // the index key, when the count was unknown
+  };
+  std::optional<Vec3> velocity, angular_velocity;  // m/s, rad/s
+  std::vector<Indexed> node_velocities, segment_angular_velocities;
+  bool perturbed = false;
+  double position_amplitude = 0.0, velocity_amplitude = 0.0;  // m, m/s
+  int seed = 1;
+};
+InitialDescription describe_initial(const Value& v, int segments);
+void apply_initial(const InitialDescription& d, Rod* rod);
+
+// The top-level `obstacles` list into *obstacles (each as an ObstacleSet accepted it, in the order
+// to add them) and *motions (URDF files relative to `base`), the top-level `contact` settings, and
+// a rod's `contact` options (scene_contact.cpp). `paths` (optional) receives the entry's path
+// ("obstacles[2]") of each obstacle.
+void read_obstacles(const Value& list, std::vector<Obstacle>* obstacles,
+                    std::vector<ObstacleMotion>* motions, const std::string& base,
                     std::vector<std::string>* paths = nullptr);
-// Refuses an obstacle placed beyond SceneBounds::max_placed_length (naming its entry), and a rod
-// with obstacle contact whose axis starts deeper inside an obstacle than 1% of its radius (naming
-// rods[i], the obstacle, the segment and the depth): the contact would throw it out at a runaway
-// speed. `obstacle_paths` from read_obstacles(), `rod_paths` per rod.
-void check_obstacles_at_start(const World& world, const std::vector<std::string>& obstacle_paths,
-                              const std::vector<std::string>& rod_paths);
+// Refuses an obstacle placed beyond SceneBounds::max_placed_length, naming its entry
+// (scene/obstacle_checks.h). `paths` from read_obstacles().
+void check_obstacle_placement(const std::vector<Obstacle>& obstacles,
+                              const std::vector<std::string>& paths);
+// Refuses a rod with obstacle contact whose axis starts deeper inside an obstacle than 1% of its
+// radius (naming rods[i], the obstacle, the segment and the depth): the contact would throw it out
+// at a runaway speed. `rod_paths` per rod.
+void check_rods_clear_of_obstacles(const World& world,
+                                   const std::vector<std::string>& obstacle_paths,
+                                   const std::vector<std::string>& rod_paths);
 void read_contact_settings(const Value& v, ContactSettings* settings);
 void read_rod_contact(const Value& v, ContactOptions* options);
 

@@ -3,9 +3,11 @@
 #ifdef CORDE_TEST_ROS_ADAPTER
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "corde_sim/NodeConfig.h"
+#include "corde_sim/ros/node_params.h"
 #include "corde_sim/scene/key_ranges.h"
 
 namespace corde_sim {
@@ -33,6 +35,29 @@ TEST(ReconfigureKeyRanges, NodeCfgRangesEqualTheTable) {
     EXPECT_EQ(e.max, r->max) << e.name;
     EXPECT_TRUE(r->min_inclusive) << e.name;  // dynamic_reconfigure's ranges are closed
   }
+}
+
+// A start-up parameter takes the table's range and ~configure's wording (before, ~tf_rate 5000 was
+// accepted at start-up, its own range [0, 10000] Hz, and clamped to 1000 by the reconfigure
+// server).
+TEST(ReconfigureKeyRanges, StartUpParametersUseTheTable) {
+  for (const char* name :
+       {"real_time_factor", "tf_rate", "marker_rate", "state_rate", "marker_min_diameter",
+        "holder_max_speed", "holder_max_acceleration", "loop_rate", "cloud_rate"}) {
+    const corde::KeyRange* r = corde::find_key_range(name);
+    ASSERT_NE(r, nullptr) << name;
+    EXPECT_EQ(start_up_range_error(name, r->min), "") << name;
+    EXPECT_EQ(start_up_range_error(name, r->max), "") << name;
+    const double above = r->max * 1.5;
+    EXPECT_EQ(start_up_range_error(name, above),
+              std::string("parameter ~") + name + ": " + corde::range_violation(*r, above))
+        << name;
+  }
+  EXPECT_EQ(start_up_range_error("tf_rate", 5000.0),
+            "parameter ~tf_rate: must be <= 1000 Hz, got 5000 (valid: [0, 1000] Hz)");
+  EXPECT_EQ(start_up_range_error("loop_rate", 0.5),
+            "parameter ~loop_rate: must be >= 1 Hz, got 0.5 (valid: [1, 1000] Hz)");
+  EXPECT_NE(start_up_range_error("state_rate", std::nan("")), "");
 }
 
 }  // namespace

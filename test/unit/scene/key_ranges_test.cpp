@@ -36,7 +36,7 @@ bool scene_override(const std::string& key, double v, std::string* text, std::st
   const std::string x = exact(v);
   for (const char* node_key :
        {"real_time_factor", "tf_rate", "marker_rate", "state_rate", "marker_min_diameter",
-        "holder_max_speed", "holder_max_acceleration"})
+        "holder_max_speed", "holder_max_acceleration", "loop_rate", "cloud_rate"})
     if (key == node_key) return false;  // the node's (reconfigure_ranges_test)
   if (key == "radius") {
     *text = "rods.0.radius=" + x;
