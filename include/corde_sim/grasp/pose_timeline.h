@@ -20,7 +20,7 @@ namespace corde {
 
 class PoseTimeline {
  public:
-  static constexpr int kCapacity = 128;     // poses kept (the oldest go when it is full)
+  static constexpr int kCapacity = 128;     // poses kept (thinned out when it is full)
   static constexpr double kMaxDelay = 0.3;  // s
   // A new stream starts this long behind its first stamp, gliding from the reference it takes
   // over to the first pose.
@@ -58,6 +58,7 @@ class PoseTimeline {
 
  private:
   void push(const Sample& s);
+  Sample& slot(int i) { return buf_[(head_ + i) % kCapacity]; }
   void start(double now, double delay);
   void change_delay(double now, double from, double to);
 

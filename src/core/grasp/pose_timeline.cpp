@@ -20,8 +20,13 @@ void PoseTimeline::change_delay(double now, double from, double to) {
 
 void PoseTimeline::push(const Sample& s) {
   if (size_ == kCapacity) {
-    head_ = (head_ + 1) % kCapacity;
-    --size_;
+    // Full of poses ahead of the reference (stamps running ahead of the simulation): every other
+    // one after the first three goes, the newest stays, so the timeline spans twice the time at
+    // half the resolution instead of losing the poses it is about to interpolate.
+    int w = 3;
+    for (int r = 4; r < size_; r += 2) slot(w++) = get(r);
+    if ((size_ - 1) % 2 == 1) slot(w++) = get(size_ - 1);
+    size_ = w;
   }
   Sample& out = buf_[(head_ + size_) % kCapacity];
   out = s;

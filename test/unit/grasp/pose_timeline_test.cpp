@@ -172,14 +172,28 @@ TEST(PoseTimeline, UnstampedGoalEndsTheStream) {
   EXPECT_TRUE(m.reference(0.15).isApprox(goal, 1e-12));
 }
 
-TEST(PoseTimeline, FullTimelineDropsTheOldest) {
+TEST(PoseTimeline, FullTimelineThinsOutAheadOfTheReference) {
   PoseTimeline tl;
   const Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-  // Poses stamped far ahead of the simulation (a clock running slow): the newest are kept.
-  for (int k = 0; k < 3 * PoseTimeline::kCapacity; ++k)
-    tl.add(0.0, 0.001 * (k + 1), Eigen::Vector3d(k, 0, 0), q, Eigen::Vector3d::Zero(), q);
-  EXPECT_EQ(tl.size(), PoseTimeline::kCapacity);
-  EXPECT_EQ(tl.newest().p.x(), 3 * PoseTimeline::kCapacity - 1);
+  // Poses stamped far ahead of the simulation (a clock running slow) on the line y = x: every
+  // one is kept until it is full, then every other one ahead, never the first ones or the newest.
+  const int n = 3 * PoseTimeline::kCapacity;
+  for (int k = 0; k < n; ++k)
+    tl.add(0.0, 0.001 * (k + 1), Eigen::Vector3d(k, k, 0), q, Eigen::Vector3d::Zero(), q);
+  EXPECT_LE(tl.size(), PoseTimeline::kCapacity);
+  EXPECT_GT(tl.size(), PoseTimeline::kCapacity / 2);
+  EXPECT_EQ(tl.newest().p.x(), n - 1);
+  EXPECT_EQ(tl.get(1).p.x(), 0.0);  // (get(0) holds the start)
+  for (int i = 1; i < tl.size(); ++i) EXPECT_GT(tl.get(i).time, tl.get(i - 1).time);
+  // Still on the commanded path everywhere between the first pose and the newest.
+  Eigen::Vector3d p;
+  Eigen::Quaterniond r;
+  for (double t = 0.0; t < 1.0; t += 1e-3) {
+    tl.at(t, &p, &r);
+    if (tl.reference_time(t) < 0.001 || tl.reference_time(t) > tl.newest().time) continue;
+    EXPECT_NEAR(p.x(), p.y(), 1e-12);
+    EXPECT_NEAR(p.x(), 1000.0 * tl.reference_time(t) - 1.0, 1e-9);
+  }
 }
 
 }  // namespace
