@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "corde_sim/grasp/pose_timeline.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
 
@@ -18,6 +19,10 @@ namespace {
 // First pose input of a grasp: the holder's reference glides there over this long instead of
 // jumping (the holder limits shape the motion further).
 constexpr double kFirstInputGlide = 0.1;  // s
+
+// A stamped pose this far (s) ahead of the simulation's time does not belong to its clock: it is
+// followed as it arrives, as an unstamped one.
+constexpr double kMaxStampLead = 1.0;
 
 // s of simulation time a link's glide may run behind its tf poses beyond one interval: covers
 // the jitter with which poses arrive and are picked up (up to about 20 ms measured with a
@@ -202,6 +207,11 @@ double NodeInputs::ros_to_sim_interval(double ros_seconds) const {
   return std::min(std::max(d, 0.0), node_.params_.max_pose_age);
 }
 
+double NodeInputs::sim_time_of_stamp(double ros_stamp) const {
+  // The inverse of the outputs' stamps (SimNode::stamp()): the one time model.
+  return node_.clock().sim_time_at(ros_stamp);
+}
+
 void NodeInputs::update_tf_holders() {
   for (auto& kv : node_.wiring_) {
     GraspWiring& w = kv.second;
@@ -284,6 +294,7 @@ void NodeInputs::on_pose(const std::string& name, const geometry_msgs::PoseStamp
     return;
   }
   e.input_time = zero ? now.toSec() : msg->header.stamp.toSec();
+  e.stamped = !zero;
   node_.commands_.push_input(std::move(e));
 }
 
@@ -360,7 +371,23 @@ void NodeInputs::apply_input(const InputEvent& e) {
       last = e.input_time;
       if (w->second.scripted)
         node_.scene_.end_script(e.grasp, "follows its pose input from now on");
-      node_.sim_.submit(corde::Command::goal(node_.world_.time(), e.grasp, e.pose, interval));
+      const double now = node_.world_.time();
+      // A stamped pose is followed at its stamp (world time), interpolated between the poses
+      // of its stream; one whose stamp is not near the simulation's time, or an unstamped one,
+      // becomes the goal from now on.
+      const double stamp = sim_time_of_stamp(e.input_time) - node_.time_offset_;
+      if (e.stamped && stamp > now - corde::PoseTimeline::kMaxDelay &&
+          stamp < now + kMaxStampLead) {
+        node_.sim_.submit(corde::Command::sample(now, e.grasp, e.pose, stamp));
+        break;
+      }
+      if (e.stamped)
+        ROS_WARN_THROTTLE(10.0,
+                          "corde_sim: pose for grasp '%s' stamped %.3f s %s the simulation's "
+                          "time: followed as it arrives, not by its stamp",
+                          e.grasp.c_str(), std::abs(stamp - now),
+                          stamp > now ? "ahead of" : "behind");
+      node_.sim_.submit(corde::Command::goal(now, e.grasp, e.pose, interval));
       break;
     }
     case InputEvent::Kind::kFrame: {

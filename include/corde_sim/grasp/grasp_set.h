@@ -90,6 +90,8 @@ class GraspSet {
   // Inputs. Each ignores a name it does not hold.
   void set_goal(const std::string& name, double now, const Eigen::Isometry3d& pose,
                 double duration);
+  // A pose of a time-stamped stream (HolderMotion::add_sample); false when it is not taken.
+  bool add_sample(const std::string& name, double now, double stamp, const Eigen::Isometry3d& pose);
   void set_wrench(World& world, const std::string& name, const Vec3& force, const Vec3& torque);
   void set_twist_rate(const std::string& name, double rate);
   // A friction grasp's grip force (N, finite and >= 0; the caller checks), from the next step.

@@ -2,12 +2,16 @@
 //
 // Poses arrive at a few to a few hundred hertz while the rod steps at kilohertz. The holder
 // follows a reference that moves from where the holder was to each new goal over the interval
-// between inputs (one input of delay, no overshoot), and the holder itself tracks that reference
+// between inputs (one input of delay, no overshoot), or, for time-stamped poses (a controller's
+// stream), the poses interpolated by their stamps (pose_timeline.h), and the holder itself tracks
+// that reference
 // within a speed and an acceleration limit, linear and angular: a pose 1 m away, or one sent at
 // 10 kHz, becomes a bounded motion instead of a yank that the rod cannot follow.
 #pragma once
 
 #include <Eigen/Geometry>
+
+#include "corde_sim/grasp/pose_timeline.h"
 
 namespace corde {
 
@@ -39,6 +43,13 @@ class HolderMotion {
   // A new goal at time `now`, reached by the reference `duration` seconds later (0: at once;
   // the limits then shape the motion).
   void set_goal(double now, const Eigen::Isometry3d& goal, double duration);
+  // A pose of a stream for time `stamp`, received at time `now`: from now on the reference is
+  // the stream's poses interpolated by their stamps, a little late (PoseTimeline), starting from
+  // the reference at `now`. A set_goal(), reset() or stop() ends the stream. False (nothing
+  // changes) for a stamp not later than the stream's newest, or not finite.
+  bool add_sample(double now, double stamp, const Eigen::Isometry3d& pose);
+  bool streaming() const { return streaming_; }
+  const PoseTimeline& stream() const { return stream_; }
   // Moves the holder from time t to t + h, tracking the reference within the limits.
   HolderClip advance(double t, double h, const HolderLimits& limits);
   // Stops where the holder is: the goal becomes the current pose.
@@ -52,12 +63,35 @@ class HolderMotion {
   const Eigen::Vector3d& angular_velocity() const { return w_; }  // world frame
   // Reference pose at time t (the interpolation between the inputs, before the limits).
   Eigen::Isometry3d reference(double t) const;
+  // What advance() changes (without the goal, the reference or the stream): taken before a step
+  // and restored to undo it.
+  struct Kinematics {
+    Eigen::Isometry3d pose;
+    Eigen::Quaterniond q;
+    Eigen::Vector3d v, w;
+    bool settled;
+    double cached_t;
+    Eigen::Vector3d cached_p;
+    Eigen::Quaterniond cached_q;
+  };
+  Kinematics kinematics() const {
+    return {pose_, q_, v_, w_, settled_, cached_t_, cached_p_, cached_q_};
+  }
+  void restore(const Kinematics& k);
   // False once the holder rests at its goal (then advance() costs nothing and changes nothing).
   bool moving() const { return !settled_; }
 
  private:
   // The reference as a position and a unit quaternion.
   void reference(double t, Eigen::Vector3d* p, Eigen::Quaterniond* q) const;
+  // True when the reference rests at the goal from time t on.
+  bool reference_ended(double t) const {
+    return streaming_ ? stream_.ended(t) : t >= t0_ + duration_;
+  }
+  void end_stream() {
+    streaming_ = false;
+    stream_.clear();
+  }
 
   Eigen::Isometry3d pose_ = Eigen::Isometry3d::Identity();
   Eigen::Quaterniond q_ = Eigen::Quaterniond::Identity();  // pose_'s rotation
@@ -72,6 +106,8 @@ class HolderMotion {
   double cached_t_ = -1e300;
   Eigen::Vector3d cached_p_ = Eigen::Vector3d::Zero();
   Eigen::Quaterniond cached_q_ = Eigen::Quaterniond::Identity();
+  bool streaming_ = false;  // the reference is stream_'s
+  PoseTimeline stream_;
 };
 
 }  // namespace corde

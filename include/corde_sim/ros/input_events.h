@@ -15,6 +15,7 @@ struct InputEvent {
   std::string grasp;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // kPose, kFrame: world frame
   double input_time = 0.0;  // kPose, kFrame: ROS time the pose is for (s)
+  bool stamped = false;     // kPose: input_time is the message's stamp (not its arrival)
   Eigen::Vector3d force = Eigen::Vector3d::Zero(), torque = Eigen::Vector3d::Zero();  // world
   double rate = 0.0;  // kTwistRate (rad/s)
 };

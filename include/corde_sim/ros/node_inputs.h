@@ -54,6 +54,9 @@ class NodeInputs {
                     std::string* error) const;
   // An interval between input stamps (ROS time) in simulation time.
   double ros_to_sim_interval(double ros_seconds) const;
+  // The node's simulation time (SimNode::sim_time()) of a ROS stamp (s): the one place that maps
+  // an input's stamp to the simulation's clock.
+  double sim_time_of_stamp(double ros_stamp) const;
 
  private:
   void on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg);

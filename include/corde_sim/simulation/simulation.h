@@ -30,7 +30,8 @@ namespace corde {
 // `time` (world time, s); a time already past applies before the next step.
 struct Command {
   enum class Kind {
-    kGoal,       // grasp's holder to `pose`, reached `duration` s later (GraspSet::set_goal)
+    kGoal,       // grasp's holder to `pose`, reached `duration` s later (GraspSet::set_goal), or,
+                 // `stamped`, the pose for world time `stamp` of a stream (GraspSet::add_sample)
     kWrench,     // grasp's applied wrench (world frame, at the held segment's midpoint)
     kTwistRate,  // grasp's twist rate about the held segment's tangent (rad/s)
     kRelease,    // grasp lets go (its script, if any, ends)
@@ -41,12 +42,18 @@ struct Command {
   std::string grasp;
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   double duration = 0.0;
+  bool stamped = false;
+  double stamp = 0.0;  // stamped: the world time the pose is for
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();
   double rate = 0.0;
   double grip_force = 0.0;
 
   static Command goal(double time, const std::string& grasp, const Eigen::Isometry3d& pose,
                       double duration);
+  // A pose of a stream for world time `stamp`: the holder's reference interpolates the stream's
+  // poses by their stamps (HolderMotion::add_sample).
+  static Command sample(double time, const std::string& grasp, const Eigen::Isometry3d& pose,
+                        double stamp);
   static Command wrench(double time, const std::string& grasp, const Vec3& force,
                         const Vec3& torque);
   static Command twist_rate(double time, const std::string& grasp, double rate);

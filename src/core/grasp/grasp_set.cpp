@@ -219,6 +219,12 @@ void GraspSet::set_goal(const std::string& name, double now, const Eigen::Isomet
   if (g && g->held) g->holder.set_goal(now, pose, duration);
 }
 
+bool GraspSet::add_sample(const std::string& name, double now, double stamp,
+                          const Eigen::Isometry3d& pose) {
+  GraspState* g = find(name);
+  return g && g->held && g->holder.add_sample(now, stamp, pose);
+}
+
 void GraspSet::set_wrench(World& world, const std::string& name, const Vec3& force,
                           const Vec3& torque) {
   GraspState* g = find(name);
@@ -281,13 +287,13 @@ int GraspSet::before_step(World& world, double t, double h, const HolderLimits& 
     // would stretch the cable beyond it towards a held node is not taken.
     const double limit = rod.section().max_strain;
     const bool check = limits.stall_at_max_strain && limit > 0.0 && g.holder.moving();
-    const HolderMotion before = g.holder;
+    const HolderMotion::Kinematics before = g.holder.kinematics();
     const Eigen::Isometry3d from = g.holder_pose();
     const HolderClip clip = g.holder.advance(t, h, limits);
     const Overstretch o =
         check ? overstretch(rod, g.grasp, from, g.holder_pose(), t + h, limit) : Overstretch{};
     if (o.anchor >= 0) {
-      g.holder = before;
+      g.holder.restore(before);
       g.holder.halt();
       if (!g.stalled) {
         g.stalled = g.stall_new = true;

@@ -45,10 +45,12 @@ void HolderMotion::reset(const Eigen::Isometry3d& pose) {
   t0_ = duration_ = 0.0;
   settled_ = true;
   cached_t_ = -1e300;
+  end_stream();
 }
 
 void HolderMotion::set_goal(double now, const Eigen::Isometry3d& goal, double duration) {
   reference(now, &p_start_, &q_start_);
+  end_stream();
   goal_ = goal;
   p_goal_ = goal.translation();
   q_goal_ = Quaterniond(goal.linear()).normalized();
@@ -66,6 +68,34 @@ void HolderMotion::stop() {
   duration_ = 0.0;
   settled_ = false;  // it may still move: it decelerates back to here
   cached_t_ = -1e300;
+  end_stream();
+}
+
+bool HolderMotion::add_sample(double now, double stamp, const Eigen::Isometry3d& pose) {
+  Vector3d p_now;
+  Quaterniond q_now;
+  reference(now, &p_now, &q_now);
+  if (!streaming_) stream_.clear();
+  const Quaterniond q = Quaterniond(pose.linear()).normalized();
+  if (!stream_.add(now, stamp, pose.translation(), q, p_now, q_now)) return false;
+  streaming_ = true;
+  goal_ = pose;
+  p_goal_ = stream_.newest().p;
+  q_goal_ = stream_.newest().q;
+  settled_ = false;
+  cached_t_ = -1e300;
+  return true;
+}
+
+void HolderMotion::restore(const Kinematics& k) {
+  pose_ = k.pose;
+  q_ = k.q;
+  v_ = k.v;
+  w_ = k.w;
+  settled_ = k.settled;
+  cached_t_ = k.cached_t;
+  cached_p_ = k.cached_p;
+  cached_q_ = k.cached_q;
 }
 
 void HolderMotion::halt() {
@@ -74,6 +104,10 @@ void HolderMotion::halt() {
 }
 
 void HolderMotion::reference(double t, Vector3d* p, Quaterniond* q) const {
+  if (streaming_) {
+    stream_.at(t, p, q);
+    return;
+  }
   if (!(duration_ > 0.0) || t >= t0_ + duration_) {
     *p = p_goal_;
     *q = q_goal_;
@@ -125,7 +159,7 @@ HolderClip HolderMotion::advance(double t, double h, const HolderLimits& limits)
   // holder visibly behind its reference is reported.
   if (lag < kReportedLag && angular_lag < kReportedAngularLag) clip = HolderClip();
   // At the goal and at rest: snap there exactly and stop computing.
-  if (t + h >= t0_ + duration_ && lag < 1e-12 && angular_lag < 1e-12 && v_.norm() < 1e-9 &&
+  if (reference_ended(t + h) && lag < 1e-12 && angular_lag < 1e-12 && v_.norm() < 1e-9 &&
       w_.norm() < 1e-9) {
     pose_.translation() = p_goal_;
     q_ = q_goal_;

@@ -22,6 +22,14 @@ Command Command::goal(double time, const std::string& grasp, const Eigen::Isomet
   return c;
 }
 
+Command Command::sample(double time, const std::string& grasp, const Eigen::Isometry3d& pose,
+                        double stamp) {
+  Command c = goal(time, grasp, pose, 0.0);
+  c.stamped = true;
+  c.stamp = stamp;
+  return c;
+}
+
 Command Command::wrench(double time, const std::string& grasp, const Vec3& force,
                         const Vec3& torque) {
   Command c;
@@ -247,7 +255,10 @@ void Simulation::apply(World* w, const Command& c, bool first) {
       const GraspState* g = grasps_.find(c.grasp);
       if (!g || !g->held) return;  // a script waiting to take hold keeps it
       if (holder_script) end_script_at(k, c.time, first);
-      grasps_.set_goal(c.grasp, c.time, c.pose, c.duration);
+      if (c.stamped)
+        grasps_.add_sample(c.grasp, c.time, c.stamp, c.pose);
+      else
+        grasps_.set_goal(c.grasp, c.time, c.pose, c.duration);
       return;
     }
     case Command::Kind::kWrench:

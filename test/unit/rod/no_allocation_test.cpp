@@ -5,6 +5,7 @@
 // operator new covers every allocation the step could make (std::vector, std::string, ...).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <new>
 #include <vector>
@@ -174,6 +175,43 @@ TEST(NoAllocation, GraspHolderStallAllocatesNothing) {
   }
   EXPECT_EQ(count, 0) << "heap allocations during 5000 grasp steps";
   EXPECT_TRUE(grasps.find("g")->stalled);
+  EXPECT_TRUE(world.finite());
+}
+
+// A grasp following a stamped pose stream (PoseTimeline): adding poses and interpolating them
+// touch no heap either.
+TEST(NoAllocation, GraspPoseStreamAllocatesNothing) {
+  World world;
+  Rod& rod = world.add_rod(make_rod("rope", 10, Vec3::Zero()));
+  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+  world.time_step = 2e-5;
+  GraspSpec spec;
+  spec.name = "g";
+  spec.rod = "rope";
+  GraspSet grasps;
+  ASSERT_EQ(grasps.add(world, spec, segment_pose(rod, 9), nullptr, 0.0), "");
+  const Eigen::Isometry3d start = grasps.find("g")->holder.pose();
+  const HolderLimits limits;
+  auto step = [&](int k) {
+    if (k % 50 == 0) {  // poses at 1 kHz, stamped 2 ms before they arrive, on a 1 cm circle
+      Eigen::Isometry3d p = start;
+      const double s = world.time() - 2e-3;
+      p.translation() += 0.01 * Vec3(0.0, std::cos(3.0 * s) - 1.0, std::sin(3.0 * s));
+      ASSERT_TRUE(grasps.add_sample("g", world.time(), s, p));
+    }
+    grasps.before_step(world, world.time(), world.time_step, limits);
+    world.step();
+    grasps.after_step(world, world.time_step);
+  };
+  step(0);  // the first hold makes the drives
+  long count = 0;
+  {
+    CountAllocations counter;
+    for (int k = 1; k < 5000; ++k) step(k);
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 5000 steps following a pose stream";
+  EXPECT_TRUE(grasps.find("g")->holder.streaming());
   EXPECT_TRUE(world.finite());
 }
 
