@@ -145,6 +145,7 @@ void NodeServices::advertise(const ros::NodeHandle& pnh) {
   threads_->advertise("grasp", &NodeServices::on_grasp, this);
   threads_->advertise("release", &NodeServices::on_release, this);
   threads_->advertise("list_grasps", &NodeServices::on_list_grasps, this);
+  threads_->advertise("set_grip", &NodeServices::on_set_grip, this);
 }
 
 void NodeServices::close() {
