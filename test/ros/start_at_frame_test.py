@@ -59,6 +59,21 @@ class StartAtFrame(unittest.TestCase):
         p, r = ct.segment_pose(seen[-1].rods[0], 0)
         self.assertLess(np.linalg.norm(p - TOOL_P), POS_TOL, "held segment after 1 s at %s" % p)
 
+    def test_1b_reset_places_it_again(self):
+        # The scene is read again (the rope straight down from (0, 0, 1)) and placed at the
+        # frame's latest pose, without waiting.
+        ct.wait_for_node(self.sim, self)
+        r = self.sim.reset()
+        self.assertTrue(r.success, r.message)
+        time.sleep(0.3)  # (past states still in flight)
+        s = self.sim.fresh_state()
+        self.assertIsNotNone(s)
+        p, rot = ct.segment_pose(s.rods[0], 0)
+        self.assertLess(np.linalg.norm(p - TOOL_P), POS_TOL, "after ~reset at %s" % p)
+        self.assertLess(ct.rotation_angle(rot @ TOOL_R.T), ROT_TOL, "rotation after ~reset")
+        fastest = max(np.linalg.norm(ct.vec(v)) for v in s.rods[0].velocities)
+        self.assertLess(fastest, REST_SPEED, "after ~reset a node moves at %.3g m/s" % fastest)
+
     def test_2_missing_frame_is_a_clear_error(self):
         scene = rospy.get_param("~scene")
         rospy.set_param("/no_frame/grasps", {"top": {
