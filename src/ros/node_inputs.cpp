@@ -10,6 +10,7 @@
 #include <cstdint>
 
 #include "corde_sim/grasp/pose_timeline.h"
+#include "corde_sim/ros/grip_input.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
 
@@ -87,6 +88,14 @@ void NodeInputs::wire_grasp(const std::string& name, GraspWiring* w) {
             [this, name](const std_msgs::Float64ConstPtr& m) { on_twist_rate(name, m); }));
   if (!w->reaction_pub)
     w->reaction_pub = node_.nh_.advertise<geometry_msgs::WrenchStamped>(base + "reaction", 10);
+  if (!w->grip_sub)
+    w->grip_sub = node_.nh_.subscribe<std_msgs::Float64>(
+        base + "grip", 10,
+        boost::function<void(const std_msgs::Float64ConstPtr&)>(
+            [this, name](const std_msgs::Float64ConstPtr& m) { on_grip(name, m); }));
+  const corde::GraspState* g = node_.grasps_.find(name);
+  if (!w->slip_pub && g && g->spec.grip.friction)
+    w->slip_pub = node_.nh_.advertise<std_msgs::Float64>(base + "slip", 10);
 }
 
 bool NodeInputs::own_frame(const std::string& frame, Eigen::Isometry3d* out) const {
@@ -345,6 +354,20 @@ void NodeInputs::on_twist_rate(const std::string& name, const std_msgs::Float64C
   node_.commands_.push_input(std::move(e));
 }
 
+void NodeInputs::on_grip(const std::string& name, const std_msgs::Float64ConstPtr& msg) {
+  const std::string error = check_grip(node_.grasps_, name, msg->data);
+  if (!error.empty()) {
+    ROS_WARN_THROTTLE(1.0, "corde_sim: grip for grasp '%s' rejected: %s", name.c_str(),
+                      error.c_str());
+    return;
+  }
+  InputEvent e;
+  e.kind = InputEvent::Kind::kGrip;
+  e.grasp = name;
+  e.grip_force = msg->data;
+  node_.commands_.push_input(std::move(e));
+}
+
 void NodeInputs::apply_input(const InputEvent& e) {
   auto w = node_.wiring_.find(e.grasp);
   if (w == node_.wiring_.end()) return;  // the scene was replaced since
@@ -417,6 +440,9 @@ void NodeInputs::apply_input(const InputEvent& e) {
       break;
     case InputEvent::Kind::kTwistRate:
       node_.sim_.submit(corde::Command::twist_rate(node_.world_.time(), e.grasp, e.rate));
+      break;
+    case InputEvent::Kind::kGrip:
+      node_.sim_.submit(corde::Command::grip(node_.world_.time(), e.grasp, e.grip_force));
       break;
   }
 }

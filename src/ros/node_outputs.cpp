@@ -4,11 +4,13 @@
 
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <std_msgs/Float64.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 
@@ -332,6 +334,14 @@ void NodeOutputs::publish_reactions() {
     m.wrench.torque.y = tau.y();
     m.wrench.torque.z = tau.z();
     kv.second.reaction_pub.publish(m);
+  }
+  for (auto& kv : node_.wiring_) {
+    double slip = 0.0;
+    if (!node_.grasps_.take_slip(kv.first, &slip) || !std::isfinite(slip)) continue;
+    if (!kv.second.slip_pub || kv.second.slip_pub.getNumSubscribers() == 0) continue;
+    std_msgs::Float64 m;
+    m.data = slip;
+    kv.second.slip_pub.publish(m);
   }
 }
 

@@ -282,6 +282,11 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
         }
       }
       read(pnh, key + "/snap", g.snap, false);
+      read(pnh, key + "/start_at_frame", g.start_at_frame, false);
+      if (g.start_at_frame) check_frame(key + "/frame", g.frame, false);
+      read(pnh, key + "/start_timeout", g.start_timeout, 10.0);
+      if (!std::isfinite(g.start_timeout) || g.start_timeout < 0.0)
+        bad(key + "/start_timeout", "must be >= 0 s, got " + num(g.start_timeout));
       p.grasps[it->first] = g;
     }
   }
@@ -359,10 +364,10 @@ NodeParams load_node_params(const ros::NodeHandle& pnh, const std::string& ns,
   ROS_INFO("corde_sim: ~contact_markers = %s, ~contact_force_scale = %g m/N",
            p.contact_markers ? "true" : "false", p.contact_force_scale);
   for (const auto& g : p.grasps)
-    ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s%s%s", g.first.c_str(),
+    ROS_INFO("corde_sim: ~grasps/%s: source %s%s%s%s%s%s", g.first.c_str(),
              to_string(g.second.source), g.second.frame.empty() ? "" : ", frame ",
              g.second.frame.c_str(), g.second.has_offset ? ", offset given" : "",
-             g.second.snap ? ", snap" : "");
+             g.second.snap ? ", snap" : "", g.second.start_at_frame ? ", starts at its frame" : "");
   return p;
 }
 

@@ -148,6 +148,7 @@ void NodeServices::advertise(const ros::NodeHandle& pnh) {
   threads_->advertise("add_obstacle", &NodeObstacles::on_add, &node_.obstacles_);
   threads_->advertise("remove_obstacle", &NodeObstacles::on_remove, &node_.obstacles_);
   threads_->advertise("list_obstacles", &NodeObstacles::on_list, &node_.obstacles_);
+  threads_->advertise("set_grip", &NodeServices::on_set_grip, this);
 }
 
 void NodeServices::close() {

@@ -3,6 +3,7 @@
 // URDF collision elements (from a parameter or a file) follow their links' tf frames (NodeInputs).
 #include "corde_sim/ros/scene_install.h"
 
+#include <ros/callback_queue.h>
 #include <ros/console.h>
 #include <ros/package.h>
 #include <sys/stat.h>
@@ -16,6 +17,7 @@
 #include "corde_sim/io/file_read.h"
 #include "corde_sim/ros/input_checks.h"
 #include "corde_sim/ros/sim_node.h"
+#include "corde_sim/statics/scene_statics.h"
 
 namespace corde_sim {
 namespace {
@@ -76,6 +78,9 @@ std::string SceneInstall::install_scene(corde::Scene scene, const std::string& p
              "' is not a valid ROS name ([A-Za-z][A-Za-z0-9_]*, at most " +
              std::to_string(kMaxNameLength) + " characters)";
   }
+  const std::string placed = place_at_frames(&scene, !installed_);
+  if (!placed.empty()) return placed;
+  installed_ = true;
   for (const std::string& w : scene.warnings) ROS_WARN("corde_sim: scene: %s", w.c_str());
   for (const std::string& s : scene.settled) ROS_INFO("corde_sim: scene: %s", s.c_str());
   if (scene.mode == corde::Scene::Mode::kStatics)
@@ -110,6 +115,63 @@ std::string SceneInstall::install_scene(corde::Scene scene, const std::string& p
   }
   node_.sim_.restart_guard();  // the grasps made are the state to go back to
   node_.outputs_.refresh_layout();
+  return "";
+}
+
+std::string SceneInstall::place_at_frames(corde::Scene* scene, bool wait) {
+  std::vector<std::string> placed_rods;
+  for (const corde::GraspSpec& spec : scene->grasps) {
+    auto p = node_.params_.grasps.find(spec.name);
+    if (p == node_.params_.grasps.end() || !p->second.start_at_frame) continue;
+    const GraspSourceParam& param = p->second;
+    const std::string what = "parameter ~grasps/" + spec.name + "/start_at_frame";
+    corde::Rod& rod = scene->world.rod(spec.rod);  // (install_scene checked the grasps)
+    if (std::find(placed_rods.begin(), placed_rods.end(), rod.name()) != placed_rods.end())
+      return what + ": rod '" + rod.name() +
+             "' is already placed at another grasp's frame; one grasp per rod starts at a frame";
+    if (!rod.node_drives().empty() || !rod.segment_drives().empty() ||
+        !rod.node_constraints().empty() || !rod.segment_constraints().empty())
+      return what + ": rod '" + rod.name() +
+             "' has boundary conditions (a clamp, fixed or driven node, or constraint) that a "
+             "rigid move to frame '" +
+             param.frame + "' would tear; hold it by its grasps only";
+    Eigen::Isometry3d frame;
+    std::string error;
+    const double deadline = wall_seconds() + (wait ? param.start_timeout : 0.0);
+    if (wait && !node_.inputs_.lookup_world(param.frame, ros::Time(0), &frame, &error))
+      ROS_INFO("corde_sim: grasp '%s' starts at tf frame '%s': waiting up to %g s for it",
+               spec.name.c_str(), param.frame.c_str(), param.start_timeout);
+    while (!node_.inputs_.lookup_world(param.frame, ros::Time(0), &frame, &error)) {
+      if (!wait || wall_seconds() >= deadline || !ros::ok()) {
+        char waited[64] = "";
+        if (wait) std::snprintf(waited, sizeof waited, " after %g s", param.start_timeout);
+        return what + ": tf frame '" + clip(param.frame) + "' not available" + waited + " (" +
+               error + "); publish it (e.g. robot_state_publisher) or raise ~grasps/" + spec.name +
+               "/start_timeout";
+      }
+      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.02));
+    }
+    corde::place_rod(rod, corde::grasp_segment(rod, spec),
+                     param.has_offset ? frame * param.offset : frame);
+    // Statics solves no contacts: the shape hanging from the frame is solved without the
+    // scene's obstacles (the run's contacts then push it out of any it reaches).
+    const auto obstacles = scene->world.obstacles;
+    scene->world.obstacles.reset();
+    try {
+      const corde::RodEquilibrium e = corde::settle_rod(scene, &rod);
+      scene->world.obstacles = obstacles;
+      ROS_INFO(
+          "corde_sim: grasp '%s' starts at tf frame '%s': rod '%s' placed there and hanging at "
+          "rest in static equilibrium (residual %.3g N, %d Newton iterations)",
+          spec.name.c_str(), param.frame.c_str(), rod.name().c_str(), e.result.residual,
+          e.result.iterations);
+    } catch (const std::exception& ex) {
+      scene->world.obstacles = obstacles;
+      return what + ": rod '" + rod.name() + "' placed at frame '" + param.frame +
+             "' has no static equilibrium the node can solve: " + ex.what();
+    }
+    placed_rods.push_back(rod.name());
+  }
   return "";
 }
 

@@ -9,6 +9,13 @@
 // changes between steps from what the last step left (GraspSet::after_step): a sticking grasp
 // whose reaction along the cable exceeded mu N slides from the next step, a sliding one whose slip
 // stopped or turned sticks, so the model is the same under every integrator.
+//
+// Torsional friction: the fingers also hold the cable about its axis up to a torque mu N r (r the
+// cable's radius). A sticking grasp that holds the orientation and whose drive held the segment
+// about the fingers' axis with more than that turns in the fingers from the next step: its nodes
+// stay held, its orientation may only turn about the axis (SegmentConstraint) against the kinetic
+// friction torque mu N r, until the turn stops or reverses (it sticks again, the turned offset
+// recorded) or the holder swings the axis (it sticks, held rigidly while it swings).
 #pragma once
 
 #include "corde_sim/grasp/grasp.h"
@@ -33,8 +40,18 @@ struct FrictionGrip {
   // The cable slid out of the fingers past its start (-1) or end (+1) in the last step (then the
   // grasp let go); 0: it did not.
   int slid_out = 0;
+  // Turning in the fingers (torsional slip, while not sliding): +1 the segment turns about +axis
+  // relative to the holder; the torque limit mu N r with the cable's radius r (m).
+  bool turning = false;
+  double turn_direction = 0.0;
+  double radius = 0.0;
 
   double limit() const { return mu * force; }  // the largest force along the cable held (N)
+  double torque_limit() const { return mu * force * radius; }  // about the cable (N m)
+  // The friction torque on the segment while it turns (world), for the fingers' axis `a` (world).
+  Vec3 friction_torque(const Vec3& a) const {
+    return turning ? Vec3(-turn_direction * torque_limit() * a) : Vec3::Zero();
+  }
   // The friction force on the cable while slipping (world), for the fingers' axis `a` (world).
   Vec3 friction(const Vec3& a) const {
     return slipping ? Vec3(-direction * limit() * a) : Vec3::Zero();
@@ -51,6 +68,13 @@ double grip_arc(const Rod& rod, int segment, const Vec3& point, const Vec3& axis
 // own target drives on them and on the segment. Allocates nothing once the constraints existed.
 void hold_sliding(Rod& rod, const Grasp& grasp, const Vec3& point, const Vec3& axis,
                   const Vec3& velocity);
+
+// Lets the grasped segment turn about `axis` (world) only, from its current orientation: its
+// orientation drive is replaced by a SegmentConstraint (torsional slip). Its nodes stay driven.
+void hold_turning(Rod& rod, const Grasp& grasp, const Vec3& axis);
+
+// Removes the constraint hold_turning() put on the grasped segment.
+void release_turning(Rod& rod, const Grasp& grasp);
 
 // Removes the line constraints hold_sliding() put on the grasped segment's nodes.
 void release_sliding(Rod& rod, const Grasp& grasp);

@@ -77,6 +77,12 @@ std::shared_ptr<const Motion> holder_motion(const GraspSpec& spec, const Eigen::
 // Pose of a segment: translation at its midpoint, rotation with the directors as columns.
 Eigen::Isometry3d segment_pose(const Rod& rod, int segment);
 
+// Moves the whole rod rigidly so that segment `segment`'s pose (segment_pose) becomes `pose`:
+// positions and orientations, and the velocities with them (body-frame angular velocities are
+// unchanged by a rigid motion). Places a cable's start shape at a gripper (the node's
+// start_at_frame). Drives and constraints are not moved: the caller checks there are none.
+void place_rod(Rod& rod, int segment, const Eigen::Isometry3d& pose);
+
 // Records the segment's current pose relative to the holder.
 Grasp make_grasp(const Rod& rod, const GraspSpec& spec, const Eigen::Isometry3d& holder_pose);
 

@@ -139,6 +139,9 @@ class GraspSet {
   // A friction grasp's state after a step (after_step); true when it let go.
   bool step_grip(World& world, GraspState* g, double h);
   void stick(World& world, GraspState* g);
+  // A sticking friction grasp's torsional state after a step (friction_grasp.h): starts turning
+  // in the fingers past mu N r, sticks again when the turn stops. `a`: the fingers' axis (world).
+  void step_turn(World& world, GraspState* g, const Vec3& a);
   std::map<std::string, GraspState> grasps_;
 };
 

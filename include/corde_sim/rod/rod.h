@@ -104,6 +104,8 @@ class Rod {
   void add_segment_constraint(const SegmentConstraint& c);
   // Removes node `node`'s constraint (false: it had none); keeps the capacity (no allocation).
   bool remove_node_constraint(int node);
+  // Removes segment `segment`'s constraint (false: it had none); keeps the capacity.
+  bool remove_segment_constraint(int segment);
   const std::vector<NodeConstraint>& node_constraints() const { return node_constraints_; }
   const std::vector<SegmentConstraint>& segment_constraints() const { return segment_constraints_; }
   // Throws std::out_of_range for a node or segment the rod does not have.

@@ -35,7 +35,8 @@ class NodeInputs {
   void start_reconfigure();
   // Stops dynamic_reconfigure's thread (after the command queue closed).
   void stop_reconfigure() { reconfigure_.reset(); }
-  // The topics of grasp `name`: pose (topic source only), wrench, twist rate, reaction.
+  // The topics of grasp `name`: pose (topic source only), wrench, twist rate, grip, reaction,
+  // slip (friction grasps).
   void wire_grasp(const std::string& name, GraspWiring* w);
   // (loop) Queues the latest pose of each tf grasp's frame, and poses the robot's links.
   void update_tf_holders();
@@ -62,6 +63,7 @@ class NodeInputs {
   void on_pose(const std::string& name, const geometry_msgs::PoseStampedConstPtr& msg);
   void on_wrench(const std::string& name, const geometry_msgs::WrenchStampedConstPtr& msg);
   void on_twist_rate(const std::string& name, const std_msgs::Float64ConstPtr& msg);
+  void on_grip(const std::string& name, const std_msgs::Float64ConstPtr& msg);
   bool own_frame(const std::string& frame, Eigen::Isometry3d* out) const;
   std::string check_workspace(const Eigen::Vector3d& p) const;
 

@@ -30,6 +30,11 @@ struct GraspSourceParam {
   // tf grasps: true = glide to the offset (given, or identity) when the frame appears, instead of
   // keeping the one the segment has then.
   bool snap = false;
+  // Scene grasps: at start-up (and ~reset) the rod is moved rigidly so that the held segment sits
+  // at `frame` (times the offset, when given), waiting up to start_timeout s of wall time for the
+  // frame, then settled in static equilibrium hanging from it.
+  bool start_at_frame = false;
+  double start_timeout = 10.0;
 };
 
 struct NodeParams {
@@ -69,7 +74,7 @@ struct NodeParams {
   bool start_paused = false;
   double status_period = 10.0;  // s of wall time between status lines in the log; 0 = none
   double benchmark = 0.0;       // s of wall time; > 0 runs, prints timings and exits
-  std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame,offset,snap}
+  std::map<std::string, GraspSourceParam> grasps;  // ~grasps/<name>/{source,frame,...}
   // A robot's links as moving obstacles (docs/ros_interface.md, "Robot collision").
   bool robot_collision = false;                         // true, or robot_urdf_file given: on
   std::string robot_description = "robot_description";  // the parameter holding the URDF

@@ -1,7 +1,7 @@
 // corde_sim_node's private services: ~reset, ~configure, ~pause, ~step, ~grasp, ~release,
-// ~list_grasps. Each callback runs on a service thread (ServiceThreads) and waits until the loop
-// has applied its command (command_queue.h); only what needs no simulation state (reading a scene,
-// a trial step of a copy) runs on the service thread, so the loop keeps its output rates.
+// ~list_grasps, ~set_grip. Each callback runs on a service thread (ServiceThreads) and waits until
+// the loop has applied its command (command_queue.h); only what needs no simulation state (reading
+// a scene, a trial step of a copy) runs on the service thread, so the loop keeps its output rates.
 #pragma once
 
 #include <ros/ros.h>
@@ -17,6 +17,7 @@
 #include "corde_sim/ListGrasps.h"
 #include "corde_sim/Release.h"
 #include "corde_sim/Reset.h"
+#include "corde_sim/SetGrip.h"
 #include "corde_sim/Step.h"
 #include "corde_sim/ros/command_queue.h"
 #include "corde_sim/ros/configure.h"
@@ -68,6 +69,9 @@ class NodeServices {
   void release(Release::Request& req, Release::Response& res);
   bool on_list_grasps(ListGrasps::Request& req, ListGrasps::Response& res);
   void list_grasps(ListGrasps::Response& res) const;
+  // ~set_grip (grip_input.cpp).
+  bool on_set_grip(SetGrip::Request& req, SetGrip::Response& res);
+  void set_grip(SetGrip::Request& req, SetGrip::Response& res);
 
   SimNode& node_;
   std::unique_ptr<ServiceThreads> threads_;  // stopped in ~SimNode, after close()

@@ -22,6 +22,13 @@ class SceneInstall {
   std::string resolve_scene(const std::string& path, std::string* error) const;
   // Returns "" or why the scene cannot be used (then nothing changed).
   std::string install_scene(corde::Scene scene, const std::string& path);
+  // The scene grasps with ~grasps/<name>/start_at_frame: each one's rod is moved rigidly so that
+  // the held segment sits at its tf frame (times its offset), then settled in static equilibrium
+  // hanging from it (corde::settle_rod; obstacles are not part of that solve). With `wait` the
+  // frame is waited for up to the grasp's start_timeout (start-up: spins the global callback
+  // queue, which fills the tf buffer); otherwise it must be in the buffer. "" or why not, naming
+  // the parameter and frame (then the scene may be partly moved: the caller drops it).
+  std::string place_at_frames(corde::Scene* scene, bool wait);
   std::string add_grasp(const corde::GraspSpec& spec, GraspSource source, const std::string& frame,
                         bool from_scene, int* segment);
   // Reads the URDF (throws std::invalid_argument naming the parameter, file and element); its
@@ -55,6 +62,7 @@ class SceneInstall {
   corde::Scene initial_;  // the scene as loaded, for ~reset
   RobotObstacles robot_;  // robot links as obstacles, and what was warned about them
   int next_marker_id_ = 0;
+  bool installed_ = false;  // a scene was installed (start-up is over: frames are not waited for)
   std::string guard_note_;
 };
 

@@ -55,6 +55,8 @@ struct GraspWiring {
   corde::GraspSpec script_spec;
   ros::Subscriber pose_sub, wrench_sub, twist_sub;
   ros::Publisher reaction_pub;
+  ros::Subscriber grip_sub;  // grasps/<name>/grip (grip_input.h)
+  ros::Publisher slip_pub;   // grasps/<name>/slip: a friction grasp's slip velocity (m/s)
 };
 
 class SimNode {

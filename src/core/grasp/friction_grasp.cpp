@@ -33,6 +33,18 @@ void hold_sliding(Rod& rod, const Grasp& grasp, const Vec3& point, const Vec3& a
   if (d && d->kind == SegmentDrive::Kind::kTarget) rod.remove_segment_drive(grasp.segment);
 }
 
+void hold_turning(Rod& rod, const Grasp& grasp, const Vec3& axis) {
+  const SegmentDrive* d = rod.segment_drive(grasp.segment);
+  if (d && d->kind == SegmentDrive::Kind::kTarget) rod.remove_segment_drive(grasp.segment);
+  SegmentConstraint c;
+  c.segment = grasp.segment;
+  c.origin = rod.orientations()[grasp.segment];
+  c.axis = axis;
+  rod.add_segment_constraint(c);  // replaces the one it had
+}
+
+void release_turning(Rod& rod, const Grasp& grasp) { rod.remove_segment_constraint(grasp.segment); }
+
 void release_sliding(Rod& rod, const Grasp& grasp) {
   for (int k = 0; k < 2; ++k) rod.remove_node_constraint(grasp.segment + k);
 }

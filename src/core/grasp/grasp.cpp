@@ -56,6 +56,14 @@ Eigen::Isometry3d segment_pose(const Rod& rod, int segment) {
   return pose;
 }
 
+void place_rod(Rod& rod, int segment, const Eigen::Isometry3d& pose) {
+  const Eigen::Isometry3d move = pose * segment_pose(rod, segment).inverse();
+  const Quat turn(move.linear());
+  for (Vec3& x : rod.positions()) x = move * x;
+  for (Vec3& v : rod.velocities()) v = move.linear() * v;
+  for (Quat& q : rod.orientations()) q = (turn * q).normalized();
+}
+
 Grasp make_grasp(const Rod& rod, const GraspSpec& spec, const Eigen::Isometry3d& holder_pose) {
   Grasp g;
   g.name = spec.name;

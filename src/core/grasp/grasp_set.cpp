@@ -143,6 +143,7 @@ std::string GraspSet::add(World& world, const GraspSpec& spec, const Eigen::Isom
   g.grip.on = spec.grip.friction;
   g.grip.force = spec.grip.force;
   g.grip.mu = spec.grip.mu;
+  g.grip.radius = world.rods()[ri].section().radius;
   attach(world, spec.name, holder, offset, now);
   if (had_wrench) apply_wrenches(world, old_rod);
   apply_wrenches(world, ri);
@@ -154,10 +155,14 @@ void GraspSet::attach(World& world, const std::string& name, const Eigen::Isomet
   GraspState* g = find(name);
   if (!g) return;
   Rod& rod = world.rods()[g->rod];
-  const bool was_slipping = g->grip.slipping;
-  if (was_slipping) {
+  const bool was_slipping = g->grip.slipping || g->grip.turning;
+  if (g->grip.slipping) {
     release_sliding(rod, g->grasp);
     g->grip.slipping = false;
+  }
+  if (g->grip.turning) {
+    release_turning(rod, g->grasp);
+    g->grip.turning = false;
   }
   const Eigen::Isometry3d segment = segment_pose(rod, g->grasp.segment);
   if (offset) {
@@ -195,9 +200,10 @@ bool GraspSet::release(World& world, const std::string& name) {
   corde::release(world.rods()[g->rod], g->grasp);
   g->held = false;
   g->twist_rate = 0.0;
-  if (g->grip.slipping) {
-    release_sliding(world.rods()[g->rod], g->grasp);
-    g->grip.slipping = false;
+  if (g->grip.slipping || g->grip.turning) {
+    if (g->grip.slipping) release_sliding(world.rods()[g->rod], g->grasp);
+    if (g->grip.turning) release_turning(world.rods()[g->rod], g->grasp);
+    g->grip.slipping = g->grip.turning = false;
     apply_wrenches(world, g->rod);
   }
   return true;
@@ -243,7 +249,7 @@ bool GraspSet::set_grip_force(World& world, const std::string& name, double forc
   GraspState* g = find(name);
   if (!g || !g->grip.on) return false;
   g->grip.force = force;
-  if (g->grip.slipping) apply_wrenches(world, g->rod);
+  if (g->grip.slipping || g->grip.turning) apply_wrenches(world, g->rod);
   return true;
 }
 
@@ -264,6 +270,9 @@ void GraspSet::apply_wrenches(World& world, int rod_index) {
       rod.add_external_force(g.grasp.segment, 0.5 * f);
       rod.add_external_force(g.grasp.segment + 1, 0.5 * f);
     }
+    if (g.rod == rod_index && g.grip.turning)  // kinetic friction against the turn
+      rod.add_external_torque(g.grasp.segment,
+                              g.grip.friction_torque(g.holder.pose().linear() * g.grip.axis));
     if (g.rod != rod_index || (g.force.isZero(0.0) && g.torque.isZero(0.0))) continue;
     // At the segment's midpoint: half on each of its nodes.
     rod.add_external_force(g.grasp.segment, 0.5 * g.force);
@@ -328,7 +337,11 @@ int GraspSet::before_step(World& world, double t, double h, const HolderLimits& 
     g.grip.line_velocity =
         g.holder.velocity() + g.holder.angular_velocity().cross(c - pose.translation());
     if (!g.grip.slipping) {
+      // Turning in the fingers: the nodes only (the constraint lets the segment turn).
+      const bool orientation = g.grasp.hold_orientation;
+      g.grasp.hold_orientation = orientation && !g.grip.turning;
       hold(rod, g.grasp, g.holder_pose());
+      g.grasp.hold_orientation = orientation;
       continue;
     }
     hold_sliding(rod, g.grasp, c, a, g.grip.line_velocity);
@@ -370,6 +383,10 @@ int GraspSet::after_step(World& world, double h) {
     }
     if (g.grasp.hold_orientation)
       if (const SegmentDrive* d = rod.segment_drive(s)) torque -= d->reaction;
+    if (g.grip.turning)
+      for (const SegmentConstraint& c : rod.segment_constraints())
+        if (c.segment == s)
+          torque -= c.reaction + g.grip.friction_torque(g.holder.pose().linear() * g.grip.axis);
     g.reaction_force_sum += force;
     g.reaction_torque_sum += torque;
     ++g.reaction_steps;
@@ -397,7 +414,14 @@ bool GraspSet::step_grip(World& world, GraspState* g, double h) {
     for (int k = 0; k < 2; ++k)
       if (const NodeDrive* d = rod.node_drive(g->grasp.segment + k)) held += d->reaction;
     const double along = held.dot(a);
-    if (!(std::abs(along) > f.limit())) return false;
+    if (!(std::abs(along) > f.limit())) {
+      step_turn(world, g, a);
+      return false;
+    }
+    if (f.turning) {
+      release_turning(rod, g->grasp);
+      f.turning = false;
+    }
     f.slipping = true;
     f.direction = along > 0.0 ? -1.0 : 1.0;
     f.line_velocity =
@@ -448,12 +472,41 @@ bool GraspSet::step_grip(World& world, GraspState* g, double h) {
   return false;
 }
 
+void GraspSet::step_turn(World& world, GraspState* g, const Vec3& a) {
+  Rod& rod = world.rods()[g->rod];
+  FrictionGrip& f = g->grip;
+  if (!g->grasp.hold_orientation) return;
+  const int s = g->grasp.segment;
+  if (!f.turning) {
+    // Turns from the next step when the drive held the segment about the axis with more than
+    // mu N r; it then turns the way the rod's torque (minus the reaction) turns it.
+    const SegmentDrive* d = rod.segment_drive(s);
+    if (!d || d->kind != SegmentDrive::Kind::kTarget) return;
+    const double about = d->reaction.dot(a);
+    if (!(std::abs(about) > f.torque_limit())) return;
+    f.turning = true;
+    f.turn_direction = about > 0.0 ? -1.0 : 1.0;
+    hold_turning(rod, g->grasp, a);
+    g->hold_pending = true;
+    apply_wrenches(world, g->rod);
+    return;
+  }
+  // Turning: sticks where it is when the turn relative to the holder stopped or reversed, or when
+  // the holder swings the axis (the constraint keeps the axis of the turn's start).
+  const Vec3 wh = g->holder.angular_velocity();
+  const Vec3 w = rod.orientations()[s] * rod.angular_velocities()[s];
+  const double rel = (w - wh).dot(a) - g->twist_rate;
+  if (!(f.turn_direction * rel > 0.0) || !(wh - a * a.dot(wh)).isZero(0.0)) stick(world, g);
+}
+
 void GraspSet::stick(World& world, GraspState* g) {
   // Holds the segment under the grip point rigidly where it is now: the offset is recorded again
   // (the twist about the fingers' axis kept), so nothing jumps.
   Rod& rod = world.rods()[g->rod];
   release_sliding(rod, g->grasp);
   g->grip.slipping = false;
+  if (g->grip.turning) release_turning(rod, g->grasp);
+  g->grip.turning = false;
   const Eigen::Isometry3d spin(Eigen::AngleAxisd(-g->twist_angle, Vec3::UnitZ()));
   g->grasp.offset = g->holder.pose().inverse() * segment_pose(rod, g->grasp.segment) * spin;
   const int s = g->grasp.segment;
@@ -493,6 +546,10 @@ void GraspSet::remake_on(World& world, int rod_index) {
     if (g.spec.place == GraspSpec::Place::kNode) {
       g.spec.place = GraspSpec::Place::kArcLength;
       g.spec.value = g.arc_length;
+    }
+    if (g.grip.turning) {  // held rigidly again at the new segment
+      release_turning(rod, g.grasp);
+      g.grip.turning = false;
     }
     g.grasp.segment = grasp_segment(rod, g.spec);
     g.arc_length = midpoint_arc_length(rod, g.grasp.segment);

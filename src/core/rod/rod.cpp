@@ -184,6 +184,14 @@ bool Rod::remove_node_constraint(int node) {
   return true;
 }
 
+bool Rod::remove_segment_constraint(int segment) {
+  auto it = std::find_if(segment_constraints_.begin(), segment_constraints_.end(),
+                         [&](const SegmentConstraint& c) { return c.segment == segment; });
+  if (it == segment_constraints_.end()) return false;
+  segment_constraints_.erase(it);
+  return true;
+}
+
 bool Rod::remove_node_drive(int node) {
   auto it = std::find_if(node_drives_.begin(), node_drives_.end(),
                          [&](const NodeDrive& d) { return d.node == node; });

@@ -219,6 +219,59 @@ TEST(FrictionGrasp, LightGripMovedAlongATautCableTracesIt) {
   }
 }
 
+// The held segment's turn about the unit axis `a` since orientation q0 (rad).
+double turn_about(const Quat& q, const Quat& q0, const Vec3& a) {
+  const Quat rel = q * q0.conjugate();
+  return 2.0 * std::atan2(rel.vec().dot(a), rel.w());
+}
+
+// Torsional friction: a free rod (no gravity) held at its middle by a friction grasp and twisted
+// there by a torque T about its axis. Below mu N r the fingers hold it; above, it turns in them
+// against mu N r: the whole rod spins up at (T - mu N r) / J, J its polar moment of inertia.
+TEST(FrictionGrasp, TwistTorqueAboveMuNrTurnsTheCableBelowItHolds) {
+  for (Integrator integrator : kAll) {
+    SCOPED_TRACE(integrator_name(integrator));
+    for (double ratio : {0.5, 2.0}) {
+      SCOPED_TRACE(ratio);
+      World w = example_world(dyn::straight_rod(damped_material(), 0.01, 1.0, 20), integrator);
+      w.gravity = Vec3::Zero();
+      const double mu = 0.5, force = 0.01, r = 0.01;
+      const double limit = mu * force * r;  // 5e-5 N m
+      GraspSet g;
+      grasp(&w, &g, friction_spec(0.5, force, mu));
+      const int s = g.find("g")->grasp.segment;
+      const Vec3 a = w.rods()[0].orientations()[s] * Vec3::UnitZ();
+      const Quat q0 = w.rods()[0].orientations()[s];
+      g.set_wrench(w, "g", Vec3::Zero(), ratio * limit * a);
+      const double t_end = 0.2;
+      const long steps = static_cast<long>(std::lround(t_end / w.time_step));
+      bool turned = false;
+      for (long k = 0; k < steps; ++k) {
+        step(&w, &g);
+        turned = turned || g.find("g")->grip.turning;
+        ASSERT_FALSE(g.find("g")->grip.slipping);
+      }
+      const double angle = turn_about(w.rods()[0].orientations()[s], q0, a);
+      if (ratio < 1.0) {
+        EXPECT_FALSE(turned);
+        EXPECT_LT(std::abs(angle), 1e-6);
+        continue;
+      }
+      EXPECT_TRUE(turned);
+      EXPECT_TRUE(g.find("g")->grip.turning);
+      double j = 0.0;
+      for (int i = 0; i < w.rods()[0].num_segments(); ++i) j += w.rods()[0].segment_inertia(i).z();
+      const double expected = 0.5 * (ratio * limit - limit) / j * t_end * t_end;
+      EXPECT_NEAR(angle, expected, 0.05 * expected);
+      // The node positions stayed held.
+      EXPECT_LT((segment_pose(w.rods()[0], s).translation() -
+                 g.find("g")->holder_pose() * g.find("g")->grip.point)
+                    .norm(),
+                1e-9);
+    }
+  }
+}
+
 TEST(FrictionGrasp, GripForceRaisedMidSlideStopsTheSlide) {
   World w = hanging(Integrator::kSplitRotation);
   const double m = rod_mass(w.rods()[0]), g0 = 9.81;

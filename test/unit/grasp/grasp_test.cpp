@@ -73,6 +73,35 @@ TEST(Grasp, MakeGraspDoesNotMoveTheRod) {
   EXPECT_LT(rod.orientations()[9].angularDistance(Quat(before_pose.linear())), 1e-12);
 }
 
+TEST(Grasp, PlaceRodMovesItRigidlyOntoThePose) {
+  Rod rod = example_rod(10, 0.0);
+  // A bent, moving rod: its shape and speeds must come along unchanged.
+  for (int i = 0; i <= 10; ++i) {
+    rod.positions()[i].z() += 0.02 * std::sin(0.5 * i);
+    rod.velocities()[i] = Vec3(0.1, -0.2 * i, 0.05);
+  }
+  for (int s = 0; s < 10; ++s)
+    rod.orientations()[s] =
+        (rod.orientations()[s] * Quat(Eigen::AngleAxisd(0.1 * s, Vec3::UnitZ()))).normalized();
+  const Rod before = rod;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Vec3(0.4, -0.2, 1.3);
+  pose.linear() = Eigen::AngleAxisd(2.5, Vec3(1, -2, 0.5).normalized()).toRotationMatrix();
+  place_rod(rod, 3, pose);
+  const Eigen::Isometry3d got = segment_pose(rod, 3);
+  EXPECT_LT((got.translation() - pose.translation()).norm(), 1e-12);
+  EXPECT_LT(Quat(got.linear()).angularDistance(Quat(pose.linear())), 1e-12);
+  // Rigid: distances between nodes, the elastic energy and the kinetic energy are unchanged.
+  const Vec3 g = Vec3::Zero();
+  EXPECT_NEAR(rod.energies(g).elastic(), before.energies(g).elastic(),
+              1e-9 * before.energies(g).elastic());
+  EXPECT_NEAR(rod.energies(g).kinetic(), before.energies(g).kinetic(),
+              1e-12 * before.energies(g).kinetic());
+  for (int i = 0; i < 10; ++i)
+    EXPECT_NEAR((rod.positions()[i + 1] - rod.positions()[0]).norm(),
+                (before.positions()[i + 1] - before.positions()[0]).norm(), 1e-12);
+}
+
 TEST(Grasp, HeldEndFollowsMovedHolder) {
   Rod rod = example_rod(20, 1e-3);
   clamp_start(&rod);
