@@ -56,7 +56,7 @@ newest_header=$({ find "$src/include/corde_sim" -path "*/ros" -prune -o -name "*
 stale=""
 objects=()
 for f in "${sources[@]}"; do
-  o="$work/obj/$(basename "$f" .cpp).o"
+  o="$work/obj/$(echo "$f" | tr / _).o"  # the whole path: two folders may hold the same name
   objects+=("$o")
   if [ ! -f "$o" ] || [ "$f" -nt "$o" ] || [ "$newest_header" -nt "$o" ]; then
     stale="$stale $f"
@@ -68,7 +68,7 @@ if [ -n "$stale" ] || [ ! -x "$bin" ]; then
   echo "$name: building $bin with $cxx"
   # shellcheck disable=SC2086
   printf '%s\n' $stale | xargs -r -P 2 -I{} sh -c \
-    "$cxx $flags -c {} -o $work/obj/\$(basename {} .cpp).o"
+    "$cxx $flags -c {} -o $work/obj/\$(echo {} | tr / _).o"
   "$cxx" -fsanitize=fuzzer,address,undefined "${objects[@]}" "${libs[@]}" -o "$bin.tmp"
   mv "$bin.tmp" "$bin"
 fi
