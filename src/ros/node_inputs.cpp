@@ -399,12 +399,14 @@ void NodeInputs::apply_input(const InputEvent& e) {
       // of its stream; one whose stamp is not near the simulation's time, or an unstamped one,
       // becomes the goal from now on.
       const double stamp = sim_time_of_stamp(e.input_time) - node_.time_offset_;
-      if (e.stamped && stamp > now - corde::PoseTimeline::kMaxDelay &&
+      // While paused the simulation's time stands still and ROS time does not: a stamp then says
+      // nothing about when in the simulation the pose is meant, so it is a goal (as unstamped).
+      if (e.stamped && !node_.sim_.paused() && stamp > now - corde::PoseTimeline::kMaxDelay &&
           stamp < now + kMaxStampLead) {
         node_.sim_.submit(corde::Command::sample(now, e.grasp, e.pose, stamp));
         break;
       }
-      if (e.stamped)
+      if (e.stamped && !node_.sim_.paused())
         ROS_WARN_THROTTLE(10.0,
                           "corde_sim: pose for grasp '%s' stamped %.3f s %s the simulation's "
                           "time: followed as it arrives, not by its stamp",

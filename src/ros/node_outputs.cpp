@@ -9,8 +9,8 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 
