@@ -90,19 +90,8 @@ bool RobotObstacles::set_link_pose(corde::ObstacleSet* set, int k, const Eigen::
 }
 
 void RobotObstacles::before_step(corde::ObstacleSet* set, double h) {
-  for (Element& e : elements_) {
-    if (e.index < 0) continue;
-    if (e.glide.moving()) {
-      set->set_pose(e.index, e.glide.pose(), e.glide.step_linear_velocity(h),
-                    e.glide.step_angular_velocity(h));
-      e.velocity_given = true;
-      e.glide.advance(h);
-    } else if (e.velocity_given) {
-      // The glide ended (at its target): at rest there until the next pose.
-      set->set_pose(e.index, e.glide.pose(), corde::Vec3::Zero(), corde::Vec3::Zero());
-      e.velocity_given = false;
-    }
-  }
+  for (Element& e : elements_)
+    if (e.index >= 0) glide_step(set, e.index, &e.glide, &e.velocity_given, h);
 }
 
 }  // namespace corde_sim

@@ -231,18 +231,8 @@ bool RuntimeObstacles::set_frame_pose(int k, const Eigen::Isometry3d& frame_pose
 }
 
 void RuntimeObstacles::before_step(corde::ObstacleSet* set, double h) {
-  for (Entry& e : entries_) {
-    if (e.index < 0) continue;
-    if (e.glide.moving()) {
-      set->set_pose(e.index, e.glide.pose(), e.glide.step_linear_velocity(h),
-                    e.glide.step_angular_velocity(h));
-      e.velocity_given = true;
-      e.glide.advance(h);
-    } else if (e.velocity_given) {
-      set->set_pose(e.index, e.glide.pose(), corde::Vec3::Zero(), corde::Vec3::Zero());
-      e.velocity_given = false;
-    }
-  }
+  for (Entry& e : entries_)
+    if (e.index >= 0) glide_step(set, e.index, &e.glide, &e.velocity_given, h);
 }
 
 }  // namespace corde_sim

@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "corde_sim/contact/obstacle.h"
+
 namespace corde_sim {
 
 class ObstacleGlide {
@@ -88,5 +90,21 @@ class ObstacleGlide {
   Vec3 v_ = Vec3::Zero(), w_ = Vec3::Zero();
   double remaining_ = 0.0;  // s of simulation time left in the glide
 };
+
+// One step h of the obstacle in slot `index` of `set` that `glide` moves: its pose and velocity
+// while it glides; once it has arrived, at rest there until the next pose. `*velocity_given`
+// records that the set holds a non-zero velocity for it.
+inline void glide_step(corde::ObstacleSet* set, int index, ObstacleGlide* glide,
+                       bool* velocity_given, double h) {
+  if (glide->moving()) {
+    set->set_pose(index, glide->pose(), glide->step_linear_velocity(h),
+                  glide->step_angular_velocity(h));
+    *velocity_given = true;
+    glide->advance(h);
+  } else if (*velocity_given) {
+    set->set_pose(index, glide->pose(), corde::Vec3::Zero(), corde::Vec3::Zero());
+    *velocity_given = false;
+  }
+}
 
 }  // namespace corde_sim
