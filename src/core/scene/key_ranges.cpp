@@ -1,19 +1,15 @@
 #include "corde_sim/scene/key_ranges.h"
 
 #include <cmath>
-#include <cstdio>
 
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/scene/scene_bounds.h"
+#include "scene_reader.h"
 
 namespace corde {
 namespace {
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+using scene_detail::num;
 
 // A bound with its unit; 0 is 0 in any unit.
 std::string bound(double v, const char* unit) {

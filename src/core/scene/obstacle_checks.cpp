@@ -2,19 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "corde_sim/contact/obstacle_checks.h"
 #include "corde_sim/scene/scene_bounds.h"
+#include "scene_reader.h"
 
 namespace corde {
 namespace {
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+using scene_detail::num;
 
 // "" or why `v` (named `what`) is not in (0, hi] metres.
 std::string length_error(const std::string& what, double v, double hi) {
