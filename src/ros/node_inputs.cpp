@@ -42,6 +42,19 @@ Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t) {
   return out;
 }
 
+geometry_msgs::Pose to_pose_msg(const Eigen::Isometry3d& pose) {
+  geometry_msgs::Pose p;
+  const Eigen::Quaterniond q(pose.linear());
+  p.position.x = pose.translation().x();
+  p.position.y = pose.translation().y();
+  p.position.z = pose.translation().z();
+  p.orientation.x = q.x();
+  p.orientation.y = q.y();
+  p.orientation.z = q.z();
+  p.orientation.w = q.w();
+  return p;
+}
+
 void NodeInputs::start_tf() {
   // Own subscriptions so that this node's own (large) /tf messages are skipped without being
   // stored; everything else goes into the buffer.

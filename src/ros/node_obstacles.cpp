@@ -32,19 +32,6 @@ ObstacleRequest to_request(const AddObstacle::Request& req) {
   return r;
 }
 
-geometry_msgs::Pose to_msg(const Eigen::Isometry3d& pose) {
-  geometry_msgs::Pose p;
-  const Eigen::Quaterniond q(pose.linear());
-  p.position.x = pose.translation().x();
-  p.position.y = pose.translation().y();
-  p.position.z = pose.translation().z();
-  p.orientation.x = q.x();
-  p.orientation.y = q.y();
-  p.orientation.z = q.z();
-  p.orientation.w = q.w();
-  return p;
-}
-
 }  // namespace
 
 bool NodeObstacles::on_add(AddObstacle::Request& req, AddObstacle::Response& res) {
@@ -148,7 +135,7 @@ void NodeObstacles::list(ListObstacles::Response* res) const {
     res->names.push_back(e.obstacle.name);
     res->frames.push_back(e.frame.empty() ? node_.params_.world_frame : e.frame);
     res->shapes.push_back(shape_kind_name(e.obstacle.shape.kind));
-    res->poses.push_back(to_msg(obstacles_.world_pose(static_cast<int>(k))));
+    res->poses.push_back(to_pose_msg(obstacles_.world_pose(static_cast<int>(k))));
     res->in_tf.push_back(e.in_tf);
   }
 }

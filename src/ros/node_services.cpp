@@ -582,17 +582,7 @@ void NodeServices::list_grasps(ListGrasps::Response& res) const {
                                                    : to_string(w->second.source));
     res.frames.push_back(w == node_.wiring_.end() ? "" : w->second.frame);
     res.held.push_back(g.held);
-    const Eigen::Isometry3d h = g.holder_pose();
-    const Eigen::Quaterniond q(h.linear());
-    geometry_msgs::Pose p;
-    p.position.x = h.translation().x();
-    p.position.y = h.translation().y();
-    p.position.z = h.translation().z();
-    p.orientation.x = q.x();
-    p.orientation.y = q.y();
-    p.orientation.z = q.z();
-    p.orientation.w = q.w();
-    res.holders.push_back(p);
+    res.holders.push_back(to_pose_msg(g.holder_pose()));
   }
 }
 

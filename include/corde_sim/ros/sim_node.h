@@ -11,6 +11,7 @@
 // NodeServices (the services), NodeOutputs (topics out, diagnostics), with NodeStats between them.
 #pragma once
 
+#include <geometry_msgs/Pose.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 
@@ -151,6 +152,8 @@ class SimNode {
 
 // A tf transform as an isometry (rotation normalised).
 Eigen::Isometry3d to_eigen(const geometry_msgs::TransformStamped& t);
+// An isometry as a pose message.
+geometry_msgs::Pose to_pose_msg(const Eigen::Isometry3d& pose);
 
 // Steady (monotonic) wall clock in seconds.
 double wall_seconds();
