@@ -30,7 +30,7 @@ class World;
 
 // Per rod: which contacts it takes part in.
 struct ContactOptions {
-  bool self = false;       // its own non-neighbouring segments (costs a broad phase per step)
+  bool self = false;       // its own non-adjacent segments (costs a broad phase per step)
   bool rods = false;       // other rods that also have `rods` (opt in, like self)
   bool obstacles = true;   // the world's obstacles
   double friction = -1.0;  // rod-rod and self friction; < 0: ContactSettings::friction
@@ -242,7 +242,7 @@ class ContactSystem {
   std::vector<std::vector<Vec3>> list_positions_;  // per rod: the nodes when it was built
   std::vector<double> list_grow_;                  // per item: grow_ when it was built
   std::vector<std::uint64_t> list_rods_;           // per rod: its options and size then
-  std::vector<int> list_skip_;                     // per item: its neighbours skipped then
+  std::vector<int> list_skip_;                     // per item: its neighbour window (fold_distance)
   double list_margin_ = 0.0;
   struct Overlap {  // a listed pair whose boxes overlap this step, in the grid's order
     std::uint64_t cell;

@@ -692,6 +692,34 @@ void ContactSystem::detect(World& world, double h, const ContactResponse& respon
   }
 }
 
+namespace {
+
+// What the pair list depends on besides positions: a rod's contact flags and its size.
+std::uint64_t list_signature(const Rod& rod) {
+  const ContactOptions& o = rod.contact_options();
+  return static_cast<std::uint64_t>(rod.num_segments()) << 2 | (o.self ? 1u : 0u) |
+         (o.rods ? 2u : 0u);
+}
+
+// Segments of a rod closer along it than this to segment s are its neighbours: their axes come
+// closer than 2 r on a rod bent smoothly, so they are kept apart by fold_distance instead.
+int neighbour_skip(const Rod& rod, int s) {
+  return 1 + static_cast<int>(std::ceil(0.8 * M_PI * rod.section().radius / rod.rest_lengths()[s]));
+}
+
+// The closest the axes of segments sa and sb of one rod may come: on a rod bent no tighter than
+// its radius r, points at arc distance L (the rest length between the segments' near nodes) are
+// 2 r sin(L / 2r) apart, 2 r once L >= pi r; closer, the rod is folded through itself.
+double fold_distance(const Rod& rod, int sa, int sb) {
+  if (sa > sb) std::swap(sa, sb);
+  const double r = rod.section().radius;
+  double arc = 0.0;
+  for (int k = sa + 1; k < sb; ++k) arc += rod.rest_lengths()[k];
+  return 2.0 * r * std::sin(std::min(arc / (2.0 * r), 0.5 * M_PI));
+}
+
+}  // namespace
+
 // Rod-rod and self contact. Each segment's box is grown by what it can travel in the step; the
 // pairs whose boxes overlap go to the narrow phase in the order of a uniform grid no finer than the
 // largest box (each box covers at most 8 cells, pairs are visited in the first cell both cover).
@@ -767,8 +795,17 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     const double dist = d.norm();
     const auto& va = velocity_[ra];
     const auto& vb = velocity_[rb];
-    const double closing = (va[sa].norm() + va[sa + 1].norm() + vb[sb].norm() + vb[sb + 1].norm());
-    const double gap = dist - ra_ - rb_;
+    // A neighbour along the rod is in contact only where the rod between them is folded; it moves
+    // with the segment, so what their relative motion closes in the step bounds its approach.
+    const bool near = ra == rb && std::abs(sa - sb) < std::max(list_skip_[o.i], list_skip_[o.j]);
+    double closing = 0.0;
+    if (near) {
+      for (int p = sa; p <= sa + 1; ++p)
+        for (int q = sb; q <= sb + 1; ++q) closing = std::max(closing, (va[p] - vb[q]).norm());
+    } else {
+      closing = va[sa].norm() + va[sa + 1].norm() + vb[sb].norm() + vb[sb + 1].norm();
+    }
+    const double gap = dist - (near ? fold_distance(rod_a, sa, sb) : ra_ + rb_);
     if (gap > cs.skin * (ra_ + rb_) + h * closing) continue;
     Contact c;
     c.rod_a = ra;
@@ -793,22 +830,6 @@ void ContactSystem::detect_rod_pairs(World& world, double h) {
     contacts_.push_back(c);
   }
 }
-
-namespace {
-
-// What the pair list depends on besides positions: a rod's contact flags and its size.
-std::uint64_t list_signature(const Rod& rod) {
-  const ContactOptions& o = rod.contact_options();
-  return static_cast<std::uint64_t>(rod.num_segments()) << 2 | (o.self ? 1u : 0u) |
-         (o.rods ? 2u : 0u);
-}
-
-// Segments of a rod closer along it than this to segment s are its neighbours (no self contact).
-int neighbour_skip(const Rod& rod, int s) {
-  return 1 + static_cast<int>(std::ceil(0.8 * M_PI * rod.section().radius / rod.rest_lengths()[s]));
-}
-
-}  // namespace
 
 // The list holds every pair whose boxes overlap now if each item's box lies inside its box at the
 // build grown by the margin: its nodes moved by at most D per axis since, so that holds while
@@ -893,8 +914,9 @@ void ContactSystem::build_pair_list(const World& world) {
         const auto [rb, sb] = items_[j];
         const Rod &rod_a = rods[ra], &rod_b = rods[rb];
         if (ra == rb) {
-          // Neighbours along the rod touch by construction: skip those within about a diameter.
-          if (!rod_a.contact_options().self || std::abs(sa - sb) <= list_skip_[i]) continue;
+          // Segments sharing a node touch by construction; nearer ones than list_skip_ are
+          // listed too and meet only where the rod folds (fold_distance).
+          if (!rod_a.contact_options().self || std::abs(sa - sb) <= 1) continue;
         } else if (!rod_a.contact_options().rods || !rod_b.contact_options().rods) {
           continue;
         }
