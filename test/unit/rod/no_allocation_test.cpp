@@ -145,18 +145,29 @@ TEST(NoAllocation, WorldStepAllocatesNothing) {
   EXPECT_GT(world.time(), 0.0199);
 }
 
+// A 10-element rope fixed at node 0, its end segment held by the grasp "g" (the grasp tests below).
+struct HeldRope {
+  World world;
+  GraspSet grasps;
+  std::string error;  // GraspSet::add's ("" when held)
+  HeldRope() {
+    Rod& rod = world.add_rod(make_rod("rope", 10, Vec3::Zero()));
+    rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
+    world.time_step = 2e-5;
+    GraspSpec spec;
+    spec.name = "g";
+    spec.rod = "rope";
+    error = grasps.add(world, spec, segment_pose(rod, 9), nullptr, 0.0);
+  }
+};
+
 // A grasp's holder moving, then stalled at the strain limit (GraspSet::before_step's check):
 // nothing on the heap either.
 TEST(NoAllocation, GraspHolderStallAllocatesNothing) {
-  World world;
-  Rod& rod = world.add_rod(make_rod("rope", 10, Vec3::Zero()));
-  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
-  world.time_step = 2e-5;
-  GraspSpec spec;
-  spec.name = "g";
-  spec.rod = "rope";
-  GraspSet grasps;
-  ASSERT_EQ(grasps.add(world, spec, segment_pose(rod, 9), nullptr, 0.0), "");
+  HeldRope held;
+  ASSERT_EQ(held.error, "");
+  World& world = held.world;
+  GraspSet& grasps = held.grasps;
   Eigen::Isometry3d far = grasps.find("g")->holder.pose();
   far.translation().x() += 5.0;
   grasps.set_goal("g", 0.0, far, 0.0);
@@ -181,15 +192,10 @@ TEST(NoAllocation, GraspHolderStallAllocatesNothing) {
 // A grasp following a stamped pose stream (PoseTimeline): adding poses and interpolating them
 // touch no heap either.
 TEST(NoAllocation, GraspPoseStreamAllocatesNothing) {
-  World world;
-  Rod& rod = world.add_rod(make_rod("rope", 10, Vec3::Zero()));
-  rod.add_node_drive({NodeDrive::Kind::kFixed, 0, rod.positions()[0]});
-  world.time_step = 2e-5;
-  GraspSpec spec;
-  spec.name = "g";
-  spec.rod = "rope";
-  GraspSet grasps;
-  ASSERT_EQ(grasps.add(world, spec, segment_pose(rod, 9), nullptr, 0.0), "");
+  HeldRope held;
+  ASSERT_EQ(held.error, "");
+  World& world = held.world;
+  GraspSet& grasps = held.grasps;
   const Eigen::Isometry3d start = grasps.find("g")->holder.pose();
   const HolderLimits limits;
   auto step = [&](int k) {
