@@ -15,6 +15,12 @@ StaticsError when statics finds no equilibrium. Batch runs on Dask: corde_sim.ba
 import json as _json
 import math as _math
 import os as _os
+import pkgutil as _pkgutil
+
+# The package spans folders: python/corde_sim (this file) and, in a catkin devel space, the one
+# holding _core and the generated messages. catkin's relay there joins them; a process that
+# finds this folder first (a Dask worker started with the parent's sys.path) joins them here.
+__path__ = _pkgutil.extend_path(__path__, __name__)
 
 from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
 from ._core import _Simulation
