@@ -481,7 +481,7 @@ def main(argv=None):
                     "variants.")
     p.add_argument("sweep", help="sweep file (YAML): scene, fixed, grid, random, rate, ...")
     p.add_argument("--out", help="output folder (default: the sweep's `out`, else "
-                                 "<sweep name>_results next to it)")
+                                 "<sweep file name>_results in the working folder)")
     p.add_argument("--scheduler", help="address of a Dask scheduler (tcp://host:8786); default: "
                                        "a local cluster")
     p.add_argument("--workers", type=int, default=None,
@@ -512,7 +512,8 @@ def main(argv=None):
         for vid, v in ids.items():
             print(vid, " ".join(corde_sim.override_strings(v)))
         return 0
-    out = a.out or sweep.get("out") or os.path.splitext(a.sweep)[0] + "_results"
+    out = (a.out or sweep.get("out") or
+           os.path.splitext(os.path.basename(a.sweep))[0] + "_results")
     every = a.every if a.every is not None else sweep.get("every")
     rate = a.rate if a.rate is not None else sweep.get("rate")
     if every is None and rate is None:

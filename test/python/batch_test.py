@@ -253,7 +253,7 @@ class Sweeps(unittest.TestCase):
             self.assertEqual(p.stdout.split("\n")[:2],
                              ["v0000 rods.cable.elements=6", "v0001 rods.cable.elements=7"])
             p = subprocess.run([sys.executable, exe, sweep, "--workers", "1", "--no-progress"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=d)
             self.assertEqual(p.returncode, 0, p.stderr)
             self.assertIn("2 of 2 variants ok", p.stdout)
             self.assertTrue(os.path.exists(os.path.join(d, "s_results", "v0001.h5")))
