@@ -14,6 +14,7 @@ worker lost mid-run has its runs started again by Dask.
 
 import argparse
 import csv
+import functools
 import hashlib
 import itertools
 import json
@@ -47,12 +48,17 @@ def variant_key(scene, overrides, out_rate=None, every=None, duration=None, guar
     if isinstance(scene, dict):
         h.update(json.dumps(scene, sort_keys=True).encode())
     else:
-        with open(scene, "rb") as f:
-            h.update(f.read())
+        h.update(_file_digest(os.path.abspath(scene), os.path.getmtime(scene)))
     for s in corde_sim.override_strings(overrides):
         h.update(b"\0" + s.encode())
     h.update(repr((FORMAT_VERSION, out_rate, every, duration, bool(guard))).encode())
     return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=16)
+def _file_digest(path, mtime):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).digest()
 
 
 def marker_path(out_path):
@@ -99,40 +105,53 @@ class _Recorder:
         for k in ("force", "moment", "point"):
             self.reactions[k].append(np.array([r[k] for r in reactions]).reshape(-1, 3))
 
+    def arrays(self):
+        """The frames as read_result() returns them (without attrs)."""
+        n = len(self.times)
+        rods = []
+        for i, r in enumerate(self.rods):
+            nodes = len(self.sim.positions(i))
+            d = {"name": self.sim.rod_names[i],
+                 "positions": np.array(r["positions"], dtype=float).reshape(n, nodes, 3),
+                 "frames": np.array(r["frames"], dtype=float).reshape(n, nodes - 1, 4),
+                 "energies": np.array(r["energies"], dtype=float).reshape(
+                     n, len(self.ENERGY_COLUMNS))}
+            if self.keep_velocities:
+                d["velocities"] = np.array(r["velocities"], dtype=float).reshape(n, nodes, 3)
+            rods.append(d)
+        supports = self.supports or []
+        reactions = {k: np.array(v, dtype=float).reshape(n, len(supports), 3)
+                     for k, v in self.reactions.items()}
+        reactions["support"] = [s for s, _ in supports]
+        reactions["rod"] = [r for _, r in supports]
+        return {"time": np.array(self.times, dtype=float), "rods": rods, "reactions": reactions,
+                "guard_events": self.sim.guard_events()}
+
     def write(self, path, attrs):
         import h5py
 
+        a = self.arrays()
         tmp = "%s.tmp-%d" % (path, os.getpid())
         str_dt = h5py.string_dtype()
         with h5py.File(tmp, "w") as f:
             for k, v in attrs.items():
                 f.attrs[k] = v
-            f.create_dataset("time", data=np.array(self.times, dtype=float))
+            f.create_dataset("time", data=a["time"])
             rods = f.create_group("rods")
-            for i, r in enumerate(self.rods):
+            for i, r in enumerate(a["rods"]):
                 g = rods.create_group(str(i))
-                g.attrs["name"] = self.sim.rod_names[i]
-                n = len(self.times)
-                nodes = len(self.sim.positions(i))
-                g.create_dataset("positions", data=np.array(r["positions"], dtype=float).reshape(
-                    n, nodes, 3))
-                g.create_dataset("frames", data=np.array(r["frames"], dtype=float).reshape(
-                    n, nodes - 1, 4))
-                if self.keep_velocities:
-                    g.create_dataset("velocities", data=np.array(
-                        r["velocities"], dtype=float).reshape(n, nodes, 3))
-                e = g.create_dataset("energies", data=np.array(r["energies"], dtype=float).reshape(
-                    n, len(self.ENERGY_COLUMNS)))
-                e.attrs["columns"] = ",".join(self.ENERGY_COLUMNS)
+                g.attrs["name"] = r["name"]
+                for k in ("positions", "frames", "velocities", "energies"):
+                    if k in r:
+                        g.create_dataset(k, data=r[k])
+                g["energies"].attrs["columns"] = ",".join(self.ENERGY_COLUMNS)
             g = f.create_group("reactions")
-            supports = self.supports or []
-            g.create_dataset("support", data=[s for s, _ in supports], dtype=str_dt)
-            g.create_dataset("rod", data=[r for _, r in supports], dtype=str_dt)
-            for k, frames in self.reactions.items():
-                g.create_dataset(k, data=np.array(frames, dtype=float).reshape(
-                    len(self.times), len(supports), 3))
+            for k in ("support", "rod"):
+                g.create_dataset(k, data=a["reactions"][k], dtype=str_dt)
+            for k in ("force", "moment", "point"):
+                g.create_dataset(k, data=a["reactions"][k])
             g = f.create_group("events")
-            g.create_dataset("guard", data=[json.dumps(e) for e in self.sim.guard_events()],
+            g.create_dataset("guard", data=[json.dumps(e) for e in a["guard_events"]],
                              dtype=str_dt)
             g.create_dataset("all", data=[json.dumps(e) for e in self.sim.events()],
                              dtype=str_dt)
@@ -140,7 +159,7 @@ class _Recorder:
 
 
 def run_variant(scene, overrides=None, out_rate=None, out_path=None, duration=None, every=None,
-                guard=True, keep_velocities=False, key=None):
+                guard=True, keep_velocities=False, key=None, collect=False):
     """Run one variant of a scene; a pure function of its arguments (Dask may run it twice).
 
     scene: scene file path (or dict); overrides: {"key.path": value} as for corde_sim.load.
@@ -153,7 +172,8 @@ def run_variant(scene, overrides=None, out_rate=None, out_path=None, duration=No
     and message; then its done marker (out_path + ".done", JSON with the returned row). None:
     nothing written. Returns the summary row: status (ok, failed: the run stopped with the
     library's message, scene_error: the scene or an override is invalid, error: anything
-    else), message, wall_time (s), sim_time, steps, frames, guard_events.
+    else), message, wall_time (s), sim_time, steps, frames, guard_events; with collect=True
+    also "data": the frames as read_result() gives them (for callers that want no files).
     """
     import corde_sim
 
@@ -201,6 +221,8 @@ def run_variant(scene, overrides=None, out_rate=None, out_path=None, duration=No
         row["guard_events"] = len(sim.guard_events())
     row["frames"] = len(rec.times) if rec else 0
     row["wall_time"] = time.perf_counter() - start
+    if collect:
+        row["data"] = rec.arrays() if rec else None
     if out_path:
         attrs = {
             "format_version": FORMAT_VERSION,
@@ -224,7 +246,7 @@ def run_variant(scene, overrides=None, out_rate=None, out_path=None, duration=No
             os.replace(tmp, out_path)
         else:
             rec.write(out_path, attrs)
-        marker = dict(row)
+        marker = {k: v for k, v in row.items() if k != "data"}
         marker["key"] = key
         _atomic_write_text(marker_path(out_path), json.dumps(marker))
     return row
@@ -433,6 +455,11 @@ def run_batch(scene, variants, out_dir, out_rate=None, every=None, duration=None
             rows[vid] = row
         else:
             todo.append((vid, ov, path, key))
+    # Temporary files left by runs killed while writing (they run again).
+    again = {vid for vid, _, _, _ in todo}
+    for name in os.listdir(out_dir):
+        if ".tmp-" in name and name.split(".h5", 1)[0] in again:
+            os.unlink(os.path.join(out_dir, name))
     bar = _Progress(len(variants), enabled=progress)
     bar.update(n=len(rows), failed=sum(r["status"] != "ok" for r in rows.values()))
     summary = os.path.join(out_dir, SUMMARY_NAME)

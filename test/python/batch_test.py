@@ -90,6 +90,12 @@ class Batch(unittest.TestCase):
             self.assertEqual(row["frames"], 31)
         for vid in self.variants:
             assert_same_file(self, os.path.join(d, vid + ".h5"), os.path.join(serial, vid + ".h5"))
+        # collect=True returns the same frames without a file.
+        data = batch.run_variant(SCENE, self.variants["v0009"], 100, collect=True)["data"]
+        ref = batch.read_result(os.path.join(d, "v0009.h5"))
+        np.testing.assert_array_equal(data["time"], ref["time"])
+        np.testing.assert_array_equal(data["rods"][0]["positions"], ref["rods"][0]["positions"])
+        np.testing.assert_array_equal(data["reactions"]["force"], ref["reactions"]["force"])
         with open(os.path.join(d, batch.SUMMARY_NAME)) as f:
             rows = list(csv.DictReader(f))
         self.assertEqual([r["id"] for r in rows], list(self.variants))
