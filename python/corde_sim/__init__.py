@@ -104,6 +104,7 @@ class Simulation:
 
     Make one with load() or parse(). Rods are named by index (0 is the first rod of the scene,
     negative counts from the end) or by name. Arrays are copies (changing them changes nothing).
+    Stepping releases the GIL; one Simulation must not be used from two threads at once.
     """
 
     def __init__(self, core):
@@ -236,14 +237,14 @@ class Simulation:
         return self._core.reactions()
 
     def guard_events(self):
-        """The stability guard's events since load, oldest first: dicts with time, kind,
-        action, rollback_to, rod, item, detail, time_step, integrator and message (the line
-        corde_run prints)."""
+        """The stability guard's events since load (the last 10000), oldest first: dicts with
+        time, kind, action, rollback_to, rod, item, detail, time_step, integrator and message
+        (the line corde_run prints)."""
         return self._core.guard_events()
 
     def events(self):
-        """Every driver event since load (guard, took_hold, let_go, cannot_hold, script_ended,
-        stalled): dicts with time, kind, grasp, text."""
+        """Every driver event since load (the last 10000: guard, took_hold, let_go, cannot_hold,
+        script_ended, stalled): dicts with time, kind, grasp, text."""
         return self._core.events()
 
     def __repr__(self):
