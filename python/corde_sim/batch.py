@@ -51,7 +51,8 @@ def variant_key(scene, overrides, out_rate=None, every=None, duration=None, guar
         h.update(_file_digest(os.path.abspath(scene), os.path.getmtime(scene)))
     for s in corde_sim.override_strings(overrides):
         h.update(b"\0" + s.encode())
-    h.update(repr((FORMAT_VERSION, out_rate, every, duration, bool(guard))).encode())
+    guard = sorted(guard.items()) if isinstance(guard, dict) else bool(guard)
+    h.update(repr((FORMAT_VERSION, out_rate, every, duration, guard)).encode())
     return h.hexdigest()
 
 
