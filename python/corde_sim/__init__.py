@@ -22,8 +22,35 @@ import pkgutil as _pkgutil
 # finds this folder first (a Dask worker started with the parent's sys.path) joins them here.
 __path__ = _pkgutil.extend_path(__path__, __name__)
 
-from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
-from ._core import _Simulation
+try:
+    from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
+    from ._core import _Simulation
+except ImportError as _e:  # the messages (corde_sim.msg) must import without the extension
+    _core_missing = _e
+
+    class Error(RuntimeError):
+        pass
+
+    class SceneError(Error, ValueError):
+        pass
+
+    class GuardError(Error):
+        pass
+
+    class RunawayError(Error):
+        pass
+
+    class StaticsError(Error):
+        pass
+
+    class _Simulation:
+        @staticmethod
+        def _missing(*args, **kwargs):
+            raise ImportError("corde_sim's extension _core is not available (%s): build it "
+                              "(cmake/CordePython.cmake, needs pybind11-dev) and put it on "
+                              "PYTHONPATH (docs/python.md)" % _core_missing)
+
+        load = parse = _missing
 
 __all__ = [
     "Error",
