@@ -22,6 +22,7 @@ import math
 import os
 import sys
 import time
+import uuid
 
 import numpy as np
 
@@ -475,10 +476,12 @@ def run_batch(scene, variants, out_dir, out_rate=None, every=None, duration=None
             client = Client(own_cluster)
         try:
             futures = {}
+            batch_id = uuid.uuid4().hex[:8]  # a task key of an earlier batch is never reused
             for vid, ov, path, key in todo:
                 fut = client.submit(run_variant, scene, ov, out_rate, path, duration, every,
-                                    guard, keep_velocities, key, key="corde-%s-%s" % (
-                                        vid, key[:16]), pure=False, retries=retries)
+                                    guard, keep_velocities, key,
+                                    key="corde-%s-%s" % (vid, batch_id), pure=False,
+                                    retries=retries)
                 futures[fut] = vid
             last_write = time.perf_counter()
             for fut in as_completed(list(futures)):
