@@ -184,19 +184,20 @@ class Batch(unittest.TestCase):
     def test_c_killed_worker(self):
         """A worker killed (SIGKILL) while it runs a variant: Dask starts the run again on a new
         worker, every result is there and equals the serial run's."""
-        variants = {"long%d" % i: {"rods.cable.material.E": 1e7 * (1 + i), "duration": 40.0}
+        variants = {"long%d" % i: {"rods.cable.material.E": 1e7 * (1 + i), "duration": 60.0}
                     for i in range(4)}
         d = os.path.join(self.tmp, "killed")
         pids = self.client.run(os.getpid)
         killed = []
 
         def killer():
-            # Kill the first worker seen running one of the long variants, half a second in.
+            # Kill the first worker seen running one of the long variants (60000 steps, 0.5 s or
+            # more each), 0.2 s in.
             deadline = time.time() + 60
             while time.time() < deadline and not killed:
                 busy = [w for w, keys in self.client.processing().items() if keys]
                 if busy:
-                    time.sleep(0.5)
+                    time.sleep(0.2)
                     unfinished = [v for v in variants
                                   if not os.path.exists(os.path.join(d, v + ".h5.done"))]
                     os.kill(pids[busy[0]], signal.SIGKILL)
