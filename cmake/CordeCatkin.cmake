@@ -37,6 +37,10 @@ file(GLOB CORDE_TOOL_SOURCES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/src/tools/*
 
 if(catkin_FOUND)
   message(STATUS "${PROJECT_NAME}: catkin found, building the ROS adapter")
+  # The Python package corde_sim (python/corde_sim, setup.py; CordePython.cmake builds its
+  # extension): relayed into the devel space and installed with the generated messages, which
+  # share its name. catkin wants this before generate_messages().
+  catkin_python_setup()
   if(CORDE_MSG_FILES)
     add_message_files(DIRECTORY msg FILES ${CORDE_MSG_FILES})
   endif()

@@ -150,6 +150,20 @@ if(CATKIN_ENABLE_TESTING)
     set_tests_properties(corde_charts_short PROPERTIES LABELS tools)
   endif()
 
+  # The Python package (test/python, label python): the API against corde_run, and the batch
+  # engine on a local Dask cluster. PYTHONPATH points at the built package (CordePython.cmake).
+  if(CORDE_PYTHON_TARGET AND TARGET corde_run)
+    foreach(_py api_test batch_test)
+      if(EXISTS "${PROJECT_SOURCE_DIR}/test/python/${_py}.py")
+        add_test(NAME python_${_py}
+          COMMAND ${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/python/${_py}.py
+          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+        set_tests_properties(python_${_py} PROPERTIES LABELS python TIMEOUT 300
+          ENVIRONMENT "PYTHONPATH=${CORDE_PYTHON_PATH};CORDE_RUN=$<TARGET_FILE:corde_run>")
+      endif()
+    endforeach()
+  endif()
+
   # The libFuzzer targets, the scene reader's and the URDF reader's (test/fuzz/README.md).
   # libFuzzer needs clang while this build may use g++, so the script compiles them with clang++
   # itself (`tests` builds them); each test fuzzes for 20 s and is skipped (exit 77) when no

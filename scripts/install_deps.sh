@@ -49,6 +49,9 @@ packages=(
   rviz librviz-dev xvfb xauth libgl1-mesa-dri x11-utils imagemagick python3-matplotlib
   # validation references (scripts/timoshenko_frequencies.py)
   python3-scipy
+  # the Python module corde_sim (pybind11) and corde_batch (Dask, HDF5, sweep files):
+  # docs/python.md
+  pybind11-dev python3-dev python3-setuptools python3-yaml python3-distributed python3-h5py
 )
 
 for arg in "$@"; do

@@ -12,6 +12,8 @@
 
 namespace corde {
 
+class Simulation;
+
 struct RunOptions {
   double duration = -1.0;       // s; < 0: the scene's duration
   int every = 0;                // CSV rows every K steps (and at the start and end); 0: auto
@@ -89,6 +91,13 @@ void write_energy_rows(std::ostream& out, const World& world);
 // "" if the world passes the runaway checks of `options` (check_state with options.limits), else
 // the first problem found (StateProblem::message()).
 std::string run_problem(const World& world, const RunOptions& options);
+
+// Has `sim` step the scene's own world (Simulation::attach; the scene must outlive that use) as
+// run_scene does, so that any caller stepping `sim` reproduces corde_run: each grasp held where it
+// takes hold or moved exactly along its keyframes (ScriptDrive::kExact), a friction grasp through
+// one of sim's grasps on them (ScriptDrive::kHolder). Throws SceneError for a grasp that cannot
+// be made.
+void drive_scene(Simulation* sim, Scene* scene);
 
 // Steps the scene's world for the duration through the simulation driver (simulation.h),
 // holding each grasp where it is at the start or moving it exactly along its keyframes

@@ -85,6 +85,27 @@ std::string run_problem(const World& world, const RunOptions& options) {
   return check_state(world, options.limits).message();
 }
 
+void drive_scene(Simulation* sim, Scene* scene) {
+  // Grasps hold their segments where they take hold or move them exactly along their keyframes
+  // (GraspSpec::motion; the ROS node moves them through holders from its inputs instead); a
+  // grasp with grasp_time or release_time takes hold and lets go in the step nearest those times.
+  sim->attach(&scene->world);
+  for (const GraspSpec& spec : scene->grasps) {
+    if (!spec.grip.friction) {
+      sim->add_script(spec, ScriptDrive::kExact);
+      continue;
+    }
+    // A friction grasp slides through its fingers: one of the driver's grasps, its holder on the
+    // keyframes (the holder limits apply).
+    World& w = sim->world();
+    const Rod& rod = w.rod(spec.rod);
+    const std::string error =
+        sim->grasps().add(w, spec, segment_pose(rod, grasp_segment(rod, spec)), nullptr, w.time());
+    if (!error.empty()) throw SceneError("grasp '" + spec.name + "': " + error);
+    sim->add_script(spec, ScriptDrive::kHolder);
+  }
+}
+
 RunResult run_scene(Scene* scene, const RunOptions& options) {
   using Clock = std::chrono::steady_clock;
   const double h = scene->world.time_step;
@@ -104,26 +125,8 @@ RunResult run_scene(Scene* scene, const RunOptions& options) {
   r.every = options.every > 0
                 ? options.every
                 : static_cast<int>(std::clamp(std::round(0.01 / h), 1.0, 1e9));  // fits an int
-  // The driver steps the scene's own world. Grasps hold
-  // their segments where they take hold or move them exactly along their keyframes
-  // (GraspSpec::motion; the ROS node moves them through holders from its inputs instead); a
-  // grasp with grasp_time or release_time takes hold and lets go in the step nearest those times.
   Simulation sim(options.guard);
-  sim.attach(&scene->world);
-  for (const GraspSpec& spec : scene->grasps) {
-    if (!spec.grip.friction) {
-      sim.add_script(spec, ScriptDrive::kExact);
-      continue;
-    }
-    // A friction grasp slides through its fingers: one of the driver's grasps, its holder on the
-    // keyframes (the holder limits apply).
-    World& w = sim.world();
-    const Rod& rod = w.rod(spec.rod);
-    const std::string error =
-        sim.grasps().add(w, spec, segment_pose(rod, grasp_segment(rod, spec)), nullptr, w.time());
-    if (!error.empty()) throw SceneError("grasp '" + spec.name + "': " + error);
-    sim.add_script(spec, ScriptDrive::kHolder);
-  }
+  drive_scene(&sim, scene);
   const World& world = sim.world();
   // Deep contacts: counted every step, reported (throttled) with the rods and obstacles named.
   double next_deep_report = -INFINITY;
