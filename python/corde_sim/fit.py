@@ -598,7 +598,7 @@ def gripper_keyframes(gripper: tuple, holder0_pos: np.ndarray, holder0_quat: np.
     rel_r = r0.inv() * R.from_quat(holder0_quat)
     keys, last = [], 0.0
     for k in range(len(t)):
-        if t[k] <= 1e-9 or (t[k] - last < 1.0 / rate - 1e-9 and k != len(t) - 1):
+        if t[k] <= 1e-9 or (t[k] - last < (1.0 - 1e-6) / rate and k != len(t) - 1):
             continue
         rk = R.from_quat(q[k])
         pos = p[k] + rk.apply(rel_p)

@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""The corde_fit command: a rosbag recording (tracked points as PoseArray, the gripper as
+PoseStamped) fitted end to end, the gripper's poses becoming the grasp's keyframes; the fitted
+scene runs in corde_run; bad input is refused with messages naming the file, key or parameter."""
+
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+import yaml
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+try:
+    from corde_sim import fit as F
+except ImportError:  # the source tree's package (corde_run as the simulator)
+    sys.path.insert(0, os.path.join(ROOT, "python"))
+    from corde_sim import fit as F
+
+SCENE = os.path.join(ROOT, "config", "scenes", "calibration_cable.yaml")
+CORDE_FIT = [sys.executable, os.path.join(ROOT, "scripts", "corde_fit")]
+
+
+def corde_fit(*args):
+    return subprocess.run(CORDE_FIT + list(args), capture_output=True, text=True)
+
+
+class Bag(unittest.TestCase):
+    def test_bag_with_gripper_poses(self):
+        from scipy.spatial.transform import Rotation as R
+
+        times = np.arange(0.0, 1.6 + 1e-9, 0.02)
+        length = F._rod_length(SCENE, {}, "cable", None)
+        s = np.linspace(0.0, length, 14)[1:-1]
+        rec = F.synthesize(SCENE, {}, "cable", times, s, 1e-3, 5, gripper_segment=11)
+        # the robot reports its tool frame: 4 cm off the grasped segment, turned by 90 degrees
+        off_p, off_r = np.array([0.0, 0.04, 0.01]), R.from_euler("x", 90, degrees=True)
+        gt, gp, gq = rec.gripper
+        hr = R.from_quat(gq)
+        rec.gripper = (gt, gp + hr.apply(off_p), (hr * off_r).as_quat())
+        rec.arc_lengths = None  # estimated by projection at the first frame
+        with tempfile.TemporaryDirectory() as tmp:
+            bag = os.path.join(tmp, "cable.bag")
+            F.write_bag_recording(bag, rec, "/cable/points", "/gripper/pose")
+            doc = F.load_scene_yaml(SCENE)
+            del doc["grasps"][0]["keyframes"]  # the motion comes from the bag
+            scene = os.path.join(tmp, "setup.yaml")
+            with open(scene, "w") as f:
+                yaml.safe_dump(doc, f)
+            out = os.path.join(tmp, "fitted.yaml")
+            p = corde_fit(scene, bag, "--gripper-topic", "/gripper/pose", "--grasp", "gripper",
+                          "--fit", "E,damping_time", "--initial", "E=4e7", "--initial",
+                          "damping_time=0.07", "--out", out, "--residuals",
+                          os.path.join(tmp, "res.csv"))
+            print(p.stdout, p.stderr, file=sys.stderr)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            fitted = F.load_scene_yaml(out)
+            e = fitted["rods"][0]["material"]["E"]
+            tau = fitted["rods"][0]["material"]["damping_time"]
+            self.assertLess(abs(e / 3e7 - 1), 0.02)
+            self.assertLess(abs(tau / 0.05 - 1), 0.10)
+            kf = fitted["grasps"][0]["keyframes"]
+            self.assertEqual(kf, {"file": "fitted_gripper.csv"})
+            self.assertTrue(os.path.isfile(os.path.join(tmp, "fitted_gripper.csv")))
+            rms = float(p.stdout.split("RMS ")[1].split(" mm")[0])
+            self.assertLess(rms, 1.15)
+            res = np.loadtxt(os.path.join(tmp, "res.csv"), delimiter=",", skiprows=1)
+            self.assertEqual(res.shape, (len(times), 2))
+            # the fitted cable runs
+            run = subprocess.run([F.find_corde_run(), out, "--quiet"], capture_output=True,
+                                 text=True)
+            self.assertEqual(run.returncode, 0, run.stderr)
+
+
+class BadInput(unittest.TestCase):
+    def test_messages(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            csv = os.path.join(tmp, "r.csv")
+            with open(csv, "w") as f:
+                f.write("time,x0,y0\n0,1,2\n")
+            p = corde_fit(SCENE, csv)
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("r.csv line 1: header must be time,x0,y0,z0", p.stderr)
+            with open(csv, "w") as f:
+                f.write("# arc_length,0.1,0.2\ntime,x0,y0,z0\n0,1,2,3\n0.1,1,2,3\n")
+            p = corde_fit(SCENE, csv)
+            self.assertIn("2 arc lengths for 1 points", p.stderr)
+            with open(csv, "w") as f:
+                f.write("time,x0,y0,z0\n0.1,1,2,3\n0.1,1,2,3\n")
+            p = corde_fit(SCENE, csv)
+            self.assertIn("times must increase strictly (frame 1: 0.1 s)", p.stderr)
+            with open(csv, "w") as f:
+                f.write("time,x0,y0,z0\n0,0.1,0,1\n0.1,0.1,0,1\n")
+            p = corde_fit(SCENE, csv, "--set", "time_step=auto")
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("time_step: auto changes with the material", p.stderr)
+            p = corde_fit(SCENE, csv, "--fit", "E,stiffness")
+            self.assertIn("unknown parameter 'stiffness'", p.stderr)
+            p = corde_fit(SCENE, csv, "--fit", "friction")
+            self.assertIn("friction: the scene has no value at obstacles.0.friction", p.stderr)
+            p = corde_fit(SCENE, csv, "--fit", "E", "--initial", "E=-3")
+            self.assertIn("E: the starting value must be > 0", p.stderr)
+            p = corde_fit(SCENE, os.path.join(tmp, "missing.csv"))
+            self.assertIn("missing.csv: No such file or directory", p.stderr)
+
+    def test_csv_round_trip(self):
+        rec = F.Recording(np.array([0.0, 0.05]), np.arange(12.0).reshape(2, 2, 3) * 1e-3,
+                          np.array([0.1, 0.2]))
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "r.csv")
+            F.write_csv_recording(path, rec)
+            back = F.read_csv_recording(path)
+        np.testing.assert_array_equal(back.times, rec.times)
+        np.testing.assert_array_equal(back.points, rec.points)
+        np.testing.assert_array_equal(back.arc_lengths, rec.arc_lengths)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
