@@ -138,6 +138,30 @@ class Mismatch(unittest.TestCase):
         self.assertLess(res.frame_rms.max(), 1.6 * np.sqrt(3) * NOISE)
 
 
+class Executors(unittest.TestCase):
+    def test_dask_workers_give_the_serial_fit(self):
+        # The runs of each Jacobian on a local Dask cluster of 2 workers: the same runs, so the
+        # same fit to the last bit.
+        rec = F.synthesize(SCENE, {}, "cable", TIMES[::2], arc_lengths(), NOISE, 4)
+        names = ["E", "damping_time"]
+        t0 = time.perf_counter()
+        serial = F.fit(SCENE, rec, params(names), "cable")
+        t1 = time.perf_counter()
+        ex = F.DaskExecutor(workers=2)
+        try:
+            t2 = time.perf_counter()
+            dask = F.fit(SCENE, rec, params(names), "cable", executor=ex)
+            t3 = time.perf_counter()
+        finally:
+            ex.close()
+        log(f"serial {t1 - t0:.1f} s, 2 Dask workers {t3 - t2:.1f} s ({serial.runs} runs)")
+        self.assertEqual(dask.workers, 2)
+        self.assertEqual(serial.runs, dask.runs)
+        for n in names:
+            self.assertEqual(serial.values[n], dask.values[n], n)
+            self.assertEqual(serial.ci[n], dask.ci[n], n)
+
+
 if __name__ == "__main__":
     argv = [a for a in sys.argv if a != "--long"]
     unittest.main(argv=argv, verbosity=2)
