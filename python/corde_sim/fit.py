@@ -269,10 +269,25 @@ def read_recording(path: str, points_topic: str = "/cable/points",
 # ---------------------------------------------------------------------------------------------
 
 
+class _Loader(yaml.SafeLoader):
+    """YAML as the scene reader (yaml-cpp) reads it: 1.0e7 and 3e-5 are numbers (YAML 1.1, and
+    so PyYAML's safe_load, makes them strings unless the exponent has a sign)."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*\.[0-9_]*|\.[0-9_]+|[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)$"),
+    list("-+0123456789."))
+
+
+def yaml_load(text):
+    return yaml.load(text, Loader=_Loader)
+
+
 def load_scene_yaml(path: str) -> dict:
     try:
         with open(path) as f:
-            doc = yaml.safe_load(f)
+            doc = yaml_load(f)
     except OSError as e:
         raise FitError(f"{path}: {e.strerror}") from None
     except yaml.YAMLError as e:
@@ -942,6 +957,51 @@ def write_fitted_scene(scene_path: str, out_path: str, res: FitResult,
         yaml.safe_dump(doc, f, sort_keys=False, default_flow_style=None, width=100)
 
 
+def material_file_data(scene_path: str, res: FitResult, rod: str, recording: str = "") -> dict:
+    """The fitted rod's material as a material file (docs/scene_format.md, "Material files"):
+    version 1, the material map's keys with the fitted values, radius, drag, the rod's contact
+    friction, and under `fit` how they were found. Raises FitError for a material given by
+    preset (a material file holds absolute values, not a preset's)."""
+    doc = load_scene_yaml(scene_path)
+    for k, v in res.overrides.items():
+        set_key(doc, k, v)
+    r = get_key(doc, f"rods.{rod}")
+    if not isinstance(r, dict):
+        raise FitError(f"rods.{rod}: no such rod")
+    mat = get_key(doc, f"rods.{rod}.material")
+    if not isinstance(mat, dict) or "preset" in mat or "file" in mat:
+        raise FitError(f"rods.{rod}.material: a material file needs the material's values "
+                       f"(not a preset or a file); give them in the scene's material map")
+    name = os.path.splitext(os.path.basename(scene_path))[0] + "_fitted"
+    out = {"version": 1, "name": name,
+           "description": f"fitted by corde_fit to {os.path.basename(recording) or 'a recording'}"}
+    if "radius" in r:
+        out["radius"] = r["radius"]
+    out.update({k: v for k, v in mat.items()})
+    if isinstance(r.get("drag"), dict):
+        out["drag"] = r["drag"]
+    if isinstance(r.get("contact"), dict) and "friction" in r["contact"]:
+        out["friction"] = r["contact"]["friction"]
+    fitrec = {"recording": os.path.basename(recording), "scene": os.path.basename(scene_path),
+              "confidence": res.confidence, "rms_residual_m": res.rms,
+              "parameters": {}}
+    for n, key in zip(res.names, res.keys):
+        if n in res.undetermined:
+            fitrec["parameters"][n] = {"key": key, "value": res.values[n],
+                                       "undetermined": res.undetermined[n]}
+        else:
+            fitrec["parameters"][n] = {"key": key, "value": res.values[n],
+                                       "interval": list(res.ci[n])}
+    out["fit"] = fitrec
+    return out
+
+
+def write_material_file(path: str, data: dict) -> None:
+    with open(path, "w") as f:
+        f.write("# material file written by corde_fit (docs/scene_format.md, Material files)\n")
+        yaml.safe_dump(data, f, sort_keys=False, default_flow_style=None, width=100)
+
+
 # ---------------------------------------------------------------------------------------------
 # Command line
 # ---------------------------------------------------------------------------------------------
@@ -1104,6 +1164,9 @@ def main(argv=None) -> int:
         ap.add_argument("--out", default=None,
                         help="fitted scene to write (default: SCENE_fitted.yaml beside SCENE)")
         ap.add_argument("--residuals", default=None, help="CSV of the residual per frame")
+        ap.add_argument("--material-file", default=None,
+                        help="also write the fitted material as a material file (e.g. "
+                             "materials/my_cable.yaml beside the scene)")
         ap.add_argument("--confidence", type=float, default=0.95)
         ap.add_argument("--max-ci-factor", type=float, default=2.0,
                         help="refuse a parameter whose interval spans more than this factor")
@@ -1167,7 +1230,7 @@ def _main_fit(a) -> int:
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     # the fitted scene keeps every --set override except the temporary keyframe file
-    res.overrides = {k: (yaml.safe_load(v) if isinstance(v, str) else v)
+    res.overrides = {k: (yaml_load(v) if isinstance(v, str) else v)
                      for k, v in res.overrides.items() if k not in extra}
     write_fitted_scene(a.scene, out, res, extra)
     print(report_text(res, params))
@@ -1175,6 +1238,11 @@ def _main_fit(a) -> int:
         print(f"corde_fit: {n}: undetermined: {why}", file=sys.stderr)
     if a.residuals:
         write_residuals_csv(a.residuals, res)
+    if a.material_file:
+        d = os.path.dirname(os.path.abspath(a.material_file))
+        os.makedirs(d, exist_ok=True)
+        write_material_file(a.material_file, material_file_data(a.scene, res, rod, a.recording))
+        print(f"material file     {a.material_file}")
     print(f"fitted scene      {out}")
     return 0
 

@@ -53,7 +53,8 @@ class Bag(unittest.TestCase):
             p = corde_fit(scene, bag, "--gripper-topic", "/gripper/pose", "--grasp", "gripper",
                           "--fit", "E,damping_time", "--initial", "E=4e7", "--initial",
                           "damping_time=0.07", "--out", out, "--residuals",
-                          os.path.join(tmp, "res.csv"))
+                          os.path.join(tmp, "res.csv"), "--material-file",
+                          os.path.join(tmp, "materials", "my_cable.yaml"))
             print(p.stdout, p.stderr, file=sys.stderr)
             self.assertEqual(p.returncode, 0, p.stderr)
             fitted = F.load_scene_yaml(out)
@@ -68,6 +69,15 @@ class Bag(unittest.TestCase):
             self.assertLess(rms, 1.15)
             res = np.loadtxt(os.path.join(tmp, "res.csv"), delimiter=",", skiprows=1)
             self.assertEqual(res.shape, (len(times), 2))
+            # the material file (docs/scene_format.md, "Material files"): absolute values
+            with open(os.path.join(tmp, "materials", "my_cable.yaml")) as f:
+                m = yaml.safe_load(f)
+            self.assertEqual(m["version"], 1)
+            self.assertEqual((m["E"], m["damping_time"]), (e, tau))
+            self.assertEqual((m["G"], m["rho"], m["radius"]), (1e7, 2000, 0.003))
+            self.assertEqual(m["drag"], {"linear_normal": 0.02})
+            self.assertEqual(m["fit"]["parameters"]["E"]["value"], e)
+            self.assertLess(m["fit"]["parameters"]["E"]["interval"][0], e)
             # the fitted cable runs
             run = subprocess.run([F.find_corde_run(), out, "--quiet"], capture_output=True,
                                  text=True)
