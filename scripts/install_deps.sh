@@ -51,7 +51,7 @@ packages=(
   python3-scipy
   # the Python module corde_sim (pybind11) and corde_batch (Dask, HDF5, sweep files):
   # docs/python.md
-  pybind11-dev python3-dev python3-yaml python3-distributed python3-h5py
+  pybind11-dev python3-dev python3-setuptools python3-yaml python3-distributed python3-h5py
   # corde_fit (docs/calibration.md): SciPy's least squares, recordings from rosbags
   python3-rosbag
 )

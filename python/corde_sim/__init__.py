@@ -15,6 +15,12 @@ StaticsError when statics finds no equilibrium. Batch runs on Dask: corde_sim.ba
 import json as _json
 import math as _math
 import os as _os
+import pkgutil as _pkgutil
+
+# The package spans folders: python/corde_sim (this file) and, in a catkin devel space, the one
+# holding _core and the generated messages. catkin's relay there joins them; a process that
+# finds this folder first (a Dask worker started with the parent's sys.path) joins them here.
+__path__ = _pkgutil.extend_path(__path__, __name__)
 
 from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
 from ._core import _Simulation
@@ -98,6 +104,7 @@ class Simulation:
 
     Make one with load() or parse(). Rods are named by index (0 is the first rod of the scene,
     negative counts from the end) or by name. Arrays are copies (changing them changes nothing).
+    Stepping releases the GIL; one Simulation must not be used from two threads at once.
     """
 
     def __init__(self, core):
@@ -230,14 +237,14 @@ class Simulation:
         return self._core.reactions()
 
     def guard_events(self):
-        """The stability guard's events since load, oldest first: dicts with time, kind,
-        action, rollback_to, rod, item, detail, time_step, integrator and message (the line
-        corde_run prints)."""
+        """The stability guard's events since load (the last 10000), oldest first: dicts with
+        time, kind, action, rollback_to, rod, item, detail, time_step, integrator and message
+        (the line corde_run prints)."""
         return self._core.guard_events()
 
     def events(self):
-        """Every driver event since load (guard, took_hold, let_go, cannot_hold, script_ended,
-        stalled): dicts with time, kind, grasp, text."""
+        """Every driver event since load (the last 10000: guard, took_hold, let_go, cannot_hold,
+        script_ended, stalled): dicts with time, kind, grasp, text."""
         return self._core.events()
 
     def __repr__(self):

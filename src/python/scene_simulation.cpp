@@ -48,6 +48,10 @@ void SceneSimulation::take_events() {
     if (e.kind == SimulationEvent::Kind::kGuard) guard_events_.push_back(e.guard);
     events_.push_back(std::move(e));
   }
+  // Bounded: the most recent kMaxEvents of each.
+  if (guard_events_.size() > kMaxEvents)
+    guard_events_.erase(guard_events_.begin(), guard_events_.end() - kMaxEvents);
+  if (events_.size() > kMaxEvents) events_.erase(events_.begin(), events_.end() - kMaxEvents);
 }
 
 void SceneSimulation::step(long n) {

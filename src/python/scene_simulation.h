@@ -65,7 +65,9 @@ class SceneSimulation {
   int rod_index(const std::string& name) const;
   const Rod& rod(int index) const;
 
-  // Events since load: the guard's, and the scripts' (took hold, let go, ...).
+  // Events since load, the last kMaxEvents of each: the guard's, and all the driver's (the
+  // guard's again, took hold, let go, ...).
+  static constexpr size_t kMaxEvents = 10000;
   const std::vector<GuardEvent>& guard_events() const { return guard_events_; }
   const std::vector<SimulationEvent>& events() const { return events_; }
   long steps() const { return steps_; }
