@@ -658,16 +658,9 @@ class DaskExecutor:
         except ImportError:
             raise FitError("--workers/--scheduler need Dask (apt-get install python3-distributed)")
         self.cluster = None
-        self._sys_path = None
         if address:
             self.client = Client(address)
         else:
-            # Worker processes start with this process's sys.path. The devel space's package
-            # puts the source folder python/ in front of it, whose corde_sim has no _core; a
-            # worker importing corde_sim from there fails and is restarted for ever. Leave such
-            # folders out while the cluster lives (this process has its modules already).
-            self._sys_path = list(sys.path)
-            sys.path[:] = [p for p in sys.path if not _package_without_core(p)]
             self.cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1,
                                         threads_per_worker=1, processes=True,
                                         dashboard_address=None)
@@ -682,15 +675,6 @@ class DaskExecutor:
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
-        if self._sys_path is not None:
-            sys.path[:] = self._sys_path
-
-
-def _package_without_core(folder: str) -> bool:
-    pkg = os.path.join(folder or ".", "corde_sim")
-    if not os.path.isfile(os.path.join(pkg, "__init__.py")):
-        return False
-    return not any(n.startswith("_core") for n in os.listdir(pkg))
 
 
 def make_executor(workers: int = 0, scheduler: Optional[str] = None):
