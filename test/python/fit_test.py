@@ -138,6 +138,23 @@ class Mismatch(unittest.TestCase):
         self.assertLess(res.frame_rms.max(), 1.6 * np.sqrt(3) * NOISE)
 
 
+class ContactFriction(unittest.TestCase):
+    def test_table_friction_recovered(self):
+        # A cable lying on a table (friction 0.4), one end pulled sideways along it: the way the
+        # rest follows gives the Coulomb coefficient.
+        scene = os.path.join(ROOT, "test", "python", "fit_table_scene.yaml")
+        rec = F.synthesize(scene, {}, "cable", TIMES, arc_lengths(scene), NOISE, 2)
+        p = [F.Parameter("friction", "obstacles.0.friction", 0.6),
+             F.Parameter("E", "rods.cable.material.E", 4.2e7)]
+        res = F.fit(scene, rec, p, "cable")
+        log(f"table: friction {res.values['friction']:.4f} {res.ci['friction']}, E "
+            f"{res.values['E']:.4g} {res.ci['E']}, rms {res.rms * 1e3:.3f} mm, {res.runs} runs")
+        self.assertEqual(res.undetermined, {})
+        self.assertLess(abs(res.values["friction"] / 0.4 - 1), 0.05)
+        self.assertLess(abs(res.values["E"] / 3e7 - 1), 0.05)
+        self.assertLess(abs(res.rms / NOISE - 1), 0.1)
+
+
 class Executors(unittest.TestCase):
     def test_dask_workers_give_the_serial_fit(self):
         # The runs of each Jacobian on a local Dask cluster of 2 workers: the same runs, so the
