@@ -378,6 +378,7 @@ class Job:
     backend: str = "auto"  # "api" (corde_sim module), "cli" (corde_run), "auto"
     corde_run: Optional[str] = None
     want_frames: bool = False
+    statics: bool = False  # each time: the static equilibrium with the drives at that time
 
 
 def find_corde_run(given: Optional[str] = None) -> str:
@@ -408,9 +409,34 @@ def simulate(job: Job):
     backend = job.backend
     if backend == "auto":
         backend = "api" if _api_available() else "cli"
+    if job.statics:
+        if backend != "api":
+            raise FitError("a statics fit needs the Python module corde_sim (build it with "
+                           "pybind11-dev installed)")
+        return _statics_api(job)
     if backend == "api":
         return _simulate_api(job)
     return _simulate_cli(job)
+
+
+def _statics_api(job: Job):
+    import corde_sim
+
+    try:
+        sim = corde_sim.load(job.scene, overrides=dict(job.overrides))
+    except Exception as e:
+        raise FitError(f"{job.scene}: {e}") from None
+    rod = int(job.rod) if str(job.rod).isdigit() else job.rod
+    out, quats = [], []
+    for t in job.times:
+        try:
+            sim.statics(time=float(t))
+        except Exception as e:
+            raise FitError(f"{job.scene}: statics at t = {t:g} s: {e}") from None
+        out.append(np.array(sim.positions(rod)))
+        if job.want_frames:
+            quats.append(np.asarray(sim.frames(rod))[:, [1, 2, 3, 0]])
+    return np.array(out), (np.array(quats) if job.want_frames else None)
 
 
 def _interp_frames(src_t, src, times):
@@ -546,12 +572,14 @@ def project_arc_lengths(points0: np.ndarray, nodes0: np.ndarray) -> np.ndarray:
 
 def synthesize(scene: str, overrides: Dict[str, object], rod: str, times: np.ndarray,
                arc_lengths: np.ndarray, noise: float, seed: int, backend: str = "auto",
-               corde_run: Optional[str] = None, gripper_segment: Optional[int] = None) -> Recording:
+               corde_run: Optional[str] = None, gripper_segment: Optional[int] = None,
+               statics: bool = False) -> Recording:
     """A synthetic recording: the scene run with the given overrides, the points at the given arc
     lengths, plus Gaussian noise of `noise` m per coordinate (seeded). With gripper_segment, the
-    gripper's poses are that segment's midpoint and frame at the same times."""
+    gripper's poses are that segment's midpoint and frame at the same times. statics: the cable
+    at rest at each time (the static equilibrium with the drives and grasps then)."""
     nodes, quats = simulate(Job(scene, overrides, rod, np.asarray(times, float), backend, corde_run,
-                                want_frames=gripper_segment is not None))
+                                want_frames=gripper_segment is not None, statics=statics))
     s_nodes = node_arc_lengths(nodes[0])
     pts = markers(nodes, s_nodes, np.asarray(arc_lengths, float))
     rng = np.random.default_rng(seed)
@@ -723,8 +751,9 @@ class Problem:
 
     def __init__(self, scene, rec: Recording, params: List[Parameter], rod: str,
                  overrides: Dict[str, object], backend="auto", corde_run=None, executor=None,
-                 scale=1e-3, diff_step=1e-3):
+                 scale=1e-3, diff_step=1e-3, statics=False):
         self.scene, self.rec, self.params, self.rod = scene, rec, params, rod
+        self.statics = statics
         self.fixed = dict(overrides)
         self.backend, self.corde_run = backend, corde_run
         self.executor = executor or SerialExecutor()
@@ -737,7 +766,8 @@ class Problem:
         ov = dict(self.fixed)
         for p, th in zip(self.params, theta):
             ov[p.key] = float(np.exp(th))
-        return Job(self.scene, ov, self.rod, self.rec.times, self.backend, self.corde_run)
+        return Job(self.scene, ov, self.rod, self.rec.times, self.backend, self.corde_run,
+                   statics=self.statics)
 
     def _residuals_of(self, pts):
         return ((pts - self.rec.points) / self.scale).reshape(-1)
@@ -781,9 +811,11 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
         overrides: Optional[Dict[str, object]] = None, backend: str = "auto",
         corde_run: Optional[str] = None, executor=None, confidence: float = 0.95,
         max_ci_factor: float = 2.0, max_iterations: int = 30, diff_step: float = 1e-3,
-        log: Callable[[str], None] = lambda s: None) -> FitResult:
+        log: Callable[[str], None] = lambda s: None, statics: bool = False) -> FitResult:
     """Fits params to the recording (arc lengths given, or projected onto the rod at the first
-    frame with the starting parameters). Parameters whose confidence interval spans more than a
+    frame with the starting parameters). statics: every frame is the cable at rest, compared
+    with the static equilibrium at its time (the drives and grasps where they are then), not
+    with a run. Parameters whose confidence interval spans more than a
     factor max_ci_factor either way (or that the residuals do not depend on) are refused as
     undetermined and kept at their starting value; the others are fitted again without them."""
     from scipy import optimize, stats
@@ -800,7 +832,7 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
     rec = copy.copy(rec)
     if rec.arc_lengths is None:
         nodes, _ = simulate(Job(scene, {**overrides, **{p.key: p.initial for p in params}}, rod,
-                                np.array([rec.times[0]]), backend, corde_run))
+                                np.array([rec.times[0]]), backend, corde_run, statics=statics))
         rec.arc_lengths = project_arc_lengths(rec.points[0], nodes[0])
         log("arc lengths projected onto the rod at the first frame: "
             + ", ".join(f"{s:.4f}" for s in rec.arc_lengths) + " m")
@@ -811,7 +843,7 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
     while True:
         prob = Problem(scene, rec, active, rod,
                        {**overrides, **{p.key: p.initial for p in params if p not in active}},
-                       backend, corde_run, executor, diff_step=diff_step)
+                       backend, corde_run, executor, diff_step=diff_step, statics=statics)
         x0 = np.log([values[p.name] for p in active])
         # parameters the recording does not depend on at all: refused before fitting
         J0 = prob.jacobian(x0)
@@ -1087,6 +1119,8 @@ def main_record(argv) -> int:
     ap.add_argument("--duration", type=float, default=None)
     ap.add_argument("--grasp", default=None, help="record this grasp's poses (a .bag only)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    ap.add_argument("--statics", action="store_true",
+                    help="each frame the static equilibrium at its time (a cable at rest)")
     ap.add_argument("--corde-run", default=None)
     a = ap.parse_args(argv)
     doc = load_scene_yaml(a.scene)
@@ -1098,7 +1132,7 @@ def main_record(argv) -> int:
     s = np.linspace(0.0, length, a.points + 2)[1:-1] if a.points > 1 else np.array([length / 2])
     seg = grasp_segment(doc, a.grasp)[1] if a.grasp else None
     rec = synthesize(a.scene, ov, rod, times, s, a.noise, a.seed, corde_run=a.corde_run,
-                     gripper_segment=seg)
+                     gripper_segment=seg, statics=a.statics)
     if a.out.endswith(".bag"):
         write_bag_recording(a.out, rec)
     else:
@@ -1155,6 +1189,9 @@ def main(argv=None) -> int:
         ap.add_argument("--max-ci-factor", type=float, default=2.0,
                         help="refuse a parameter whose interval spans more than this factor")
         ap.add_argument("--max-iterations", type=int, default=30)
+        ap.add_argument("--statics", action="store_true",
+                        help="every frame is the cable at rest: compare with the static "
+                             "equilibrium at its time instead of a run")
         ap.add_argument("--workers", type=int, default=0,
                         help="Dask local cluster of this many workers (0 or 1: serial)")
         ap.add_argument("--scheduler", default=None, help="Dask scheduler address")
@@ -1208,7 +1245,8 @@ def _main_fit(a) -> int:
         executor = make_executor(a.workers, a.scheduler)
         try:
             res = fit(a.scene, rec, params, rod, ov, a.backend, a.corde_run, executor,
-                      a.confidence, a.max_ci_factor, a.max_iterations, log=log)
+                      a.confidence, a.max_ci_factor, a.max_iterations, log=log,
+                      statics=a.statics)
         finally:
             executor.close()
     finally:

@@ -138,6 +138,24 @@ class Mismatch(unittest.TestCase):
         self.assertLess(res.frame_rms.max(), 1.6 * np.sqrt(3) * NOISE)
 
 
+class Statics(unittest.TestCase):
+    def test_cable_at_rest_in_each_pose(self):
+        # The gripper stops at 23 poses along its path and the cable comes to rest in each: the
+        # frames are static equilibria (corde_fit --statics), no run, no damping to fit.
+        times = np.arange(0.0, 1.1 + 1e-9, 0.05)
+        rec = F.synthesize(SCENE, {}, "cable", times, arc_lengths(), NOISE, 5, statics=True)
+        res = F.fit(SCENE, rec, params(["E", "G"]), "cable", statics=True)
+        log("statics: " + ", ".join(
+            f"{n} {res.values[n] / TRUTH[n] - 1:+.2%} [{res.ci[n][0] / TRUTH[n] - 1:+.2%}, "
+            f"{res.ci[n][1] / TRUTH[n] - 1:+.2%}]" for n in ("E", "G"))
+            + f"; rms {res.rms * 1e3:.3f} mm, {res.runs} runs, {res.wall_time:.2f} s")
+        self.assertLess(abs(res.values["E"] / TRUTH["E"] - 1), 0.02)
+        self.assertLess(abs(res.values["G"] / TRUTH["G"] - 1), 0.05)
+        self.assertLess(abs(res.rms / NOISE - 1), 0.1)
+        for n in ("E", "G"):
+            self.assertTrue(res.ci[n][0] <= TRUTH[n] <= res.ci[n][1], n)
+
+
 class ContactFriction(unittest.TestCase):
     def test_table_friction_recovered(self):
         # A cable lying on a table (friction 0.4), one end pulled sideways along it: the way the
