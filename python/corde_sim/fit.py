@@ -973,7 +973,8 @@ def write_fitted_scene(scene_path: str, out_path: str, res: FitResult,
         yaml.safe_dump(doc, f, sort_keys=False, default_flow_style=None, width=100)
 
 
-def material_file_data(scene_path: str, res: FitResult, rod: str, recording: str = "") -> dict:
+def material_file_data(scene_path: str, res: FitResult, rod: str, recording: str = "",
+                       name: Optional[str] = None) -> dict:
     """The fitted rod's material as a material file (docs/scene_format.md, "Material files"):
     version 1, the material map's keys with the fitted values, radius, drag, the rod's contact
     friction, and under `fit` how they were found. Raises FitError for a material given by
@@ -988,7 +989,7 @@ def material_file_data(scene_path: str, res: FitResult, rod: str, recording: str
     if not isinstance(mat, dict) or "preset" in mat or "file" in mat:
         raise FitError(f"rods.{rod}.material: a material file needs the material's values "
                        f"(not a preset or a file); give them in the scene's material map")
-    name = os.path.splitext(os.path.basename(scene_path))[0] + "_fitted"
+    name = name or os.path.splitext(os.path.basename(scene_path))[0] + "_fitted"
     out = {"version": 1, "name": name,
            "description": f"fitted by corde_fit to {os.path.basename(recording) or 'a recording'}"}
     if "radius" in r:
@@ -1263,7 +1264,9 @@ def _main_fit(a) -> int:
     if a.material_file:
         d = os.path.dirname(os.path.abspath(a.material_file))
         os.makedirs(d, exist_ok=True)
-        write_material_file(a.material_file, material_file_data(a.scene, res, rod, a.recording))
+        name = os.path.splitext(os.path.basename(a.material_file))[0]
+        write_material_file(a.material_file,
+                            material_file_data(a.scene, res, rod, a.recording, name))
         print(f"material file     {a.material_file}")
     print(f"fitted scene      {out}")
     return 0

@@ -72,7 +72,7 @@ class Bag(unittest.TestCase):
             # the material file (docs/scene_format.md, "Material files"): absolute values
             with open(os.path.join(tmp, "materials", "my_cable.yaml")) as f:
                 m = yaml.safe_load(f)
-            self.assertEqual(m["version"], 1)
+            self.assertEqual((m["version"], m["name"]), (1, "my_cable"))
             self.assertEqual((m["E"], m["damping_time"]), (e, tau))
             self.assertEqual((m["G"], m["rho"], m["radius"]), (1e7, 2000, 0.003))
             self.assertEqual(m["drag"], {"linear_normal": 0.02})
