@@ -25,7 +25,7 @@ START = {"E": 4.2e7, "G": 0.7e7, "damping_time": 0.03, "drag": 0.03}
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "docs", "calibration.png")
     times = np.arange(0.0, 1.6 + 1e-9, 0.05)
-    length = F._rod_length(SCENE, {}, "cable", None)
+    length = F.rod_length(SCENE, {}, "cable", None)
     s = np.linspace(0.0, length, 17)[1:-1]
     rec = F.synthesize(SCENE, {}, "cable", times, s, 1e-3, 1)
     params = [F.Parameter(n, F.PARAMETERS[n][0].format(rod="cable", obstacle="0"), v)

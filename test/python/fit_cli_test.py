@@ -32,7 +32,7 @@ class Bag(unittest.TestCase):
         from scipy.spatial.transform import Rotation as R
 
         times = np.arange(0.0, 1.6 + 1e-9, 0.02)
-        length = F._rod_length(SCENE, {}, "cable", None)
+        length = F.rod_length(SCENE, {}, "cable", None)
         s = np.linspace(0.0, length, 14)[1:-1]
         rec = F.synthesize(SCENE, {}, "cable", times, s, 1e-3, 5, gripper_segment=11)
         # the robot reports its tool frame: 4 cm off the grasped segment, turned by 90 degrees

@@ -10,9 +10,7 @@ CORDE_FIT_LONG=1): 10, with the confidence intervals' coverage counted (docs/cal
 """
 
 import os
-import subprocess
 import sys
-import tempfile
 import time
 import unittest
 
@@ -40,7 +38,7 @@ PLANAR = ("[{time: 0.3, displacement: [-0.15, 0, 0.05]}, {time: 0.7, displacemen
 
 
 def arc_lengths(scene=SCENE, overrides=None, points=15):
-    length = F._rod_length(scene, overrides or {}, "cable", None)
+    length = F.rod_length(scene, overrides or {}, "cable", None)
     return np.linspace(0.0, length, points + 2)[1:-1]
 
 
