@@ -181,7 +181,7 @@ def _statics_api(job: Job):
     try:
         sim = corde_sim.load(job.scene, overrides=dict(job.overrides))
     except Exception as e:
-        raise FitError(f"{job.scene}: {e}") from None
+        raise FitError(str(e)) from None  # the message names the file
     rod = int(job.rod) if str(job.rod).isdigit() else job.rod
     out, quats = [], []
     for t in job.times:
@@ -210,7 +210,7 @@ def _simulate_api(job: Job):
     try:
         sim = corde_sim.load(job.scene, overrides=dict(job.overrides))
     except Exception as e:
-        raise FitError(f"{job.scene}: {e}") from None
+        raise FitError(str(e)) from None  # the message names the file
     rod = int(job.rod) if str(job.rod).isdigit() else job.rod
     try:
         x = np.array(sim.positions(rod))

@@ -112,6 +112,11 @@ class BadInput(unittest.TestCase):
             self.assertIn("friction: the scene has no value at obstacles.0.friction", p.stderr)
             p = corde_fit(SCENE, csv, "--fit", "E", "--initial", "E=-3")
             self.assertIn("E: the starting value must be > 0", p.stderr)
+            p = corde_fit(SCENE, csv, "--fit", "E", "--set", "rods.cable.material.G=-5")
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("calibration_cable.yaml: rods[0].material.G: must be > 0, got -5",
+                          p.stderr)  # the library's message, once
+            self.assertEqual(p.stderr.count("calibration_cable.yaml"), 1)
             p = corde_fit(SCENE, os.path.join(tmp, "missing.csv"))
             self.assertIn("missing.csv: No such file or directory", p.stderr)
 
