@@ -22,8 +22,35 @@ import pkgutil as _pkgutil
 # finds this folder first (a Dask worker started with the parent's sys.path) joins them here.
 __path__ = _pkgutil.extend_path(__path__, __name__)
 
-from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
-from ._core import _Simulation
+try:
+    from ._core import Error, GuardError, RunawayError, SceneError, StaticsError  # noqa: F401
+    from ._core import _Simulation
+except ImportError as _e:  # the messages (corde_sim.msg) must import without the extension
+    _core_missing = _e
+
+    class Error(RuntimeError):
+        pass
+
+    class SceneError(Error, ValueError):
+        pass
+
+    class GuardError(Error):
+        pass
+
+    class RunawayError(Error):
+        pass
+
+    class StaticsError(Error):
+        pass
+
+    class _Simulation:
+        @staticmethod
+        def _missing(*args, **kwargs):
+            raise ImportError("corde_sim's extension _core is not available (%s): build it "
+                              "(cmake/CordePython.cmake, needs pybind11-dev) and put it on "
+                              "PYTHONPATH (docs/python.md)" % _core_missing)
+
+        load = parse = _missing
 
 __all__ = [
     "Error",
@@ -91,6 +118,14 @@ def override_strings(overrides):
             raise ValueError("override key %r: needs a key path such as rods.0.elements" % (key,))
         out.append(key + "=" + yaml_value(value))
     return out
+
+
+def _guard_args(guard):
+    """(enabled, settings) from guard=True/False or a dict of the guard's settings."""
+    if isinstance(guard, dict):
+        settings = dict(guard)
+        return bool(settings.pop("enabled", True)), settings
+    return bool(guard), {}
 
 
 def _rod_arg(rod):
@@ -260,14 +295,16 @@ def load(scene, overrides=None, guard=True):
     overrides: {"key.path": value} (or "key.path=value" strings): corde_run's --set, applied to
     the YAML before it is checked, e.g. {"rods.cable.material.E": 2e7, "integrator": "bdf2",
     "grasps.gripper.keyframes.1.position": [0.5, 0, 1]}.
-    guard: False runs without the stability guard (corde_run --no-guard).
+    guard: False runs without the stability guard (corde_run --no-guard); a dict sets its
+    settings (docs/stability_guard.md): check_every (steps between checks, 64), max_halvings (3),
+    allow_implicit (True), energy_tolerance (0.1), energy_floor (1e-3), relax_after (0.5 s).
     Raises SceneError with corde_run's message ("file: key.path: what is wrong").
     """
     strings = override_strings(overrides)
     if isinstance(scene, dict):
         return parse(scene, overrides=overrides, guard=guard)
     path = _os.fspath(scene)
-    return Simulation(_Simulation.load(path, strings, bool(guard)))
+    return Simulation(_Simulation.load(path, strings, *_guard_args(guard)))
 
 
 def parse(text, overrides=None, source="<string>", guard=True):
@@ -279,4 +316,4 @@ def parse(text, overrides=None, source="<string>", guard=True):
         if source == "<string>":
             source = "<dict>"
     return Simulation(_Simulation.parse(str(text), override_strings(overrides), source,
-                                        bool(guard)))
+                                        *_guard_args(guard)))

@@ -22,6 +22,7 @@ import math
 import os
 import sys
 import time
+import uuid
 
 import numpy as np
 
@@ -51,7 +52,8 @@ def variant_key(scene, overrides, out_rate=None, every=None, duration=None, guar
         h.update(_file_digest(os.path.abspath(scene), os.path.getmtime(scene)))
     for s in corde_sim.override_strings(overrides):
         h.update(b"\0" + s.encode())
-    h.update(repr((FORMAT_VERSION, out_rate, every, duration, bool(guard))).encode())
+    guard = sorted(guard.items()) if isinstance(guard, dict) else bool(guard)
+    h.update(repr((FORMAT_VERSION, out_rate, every, duration, guard)).encode())
     return h.hexdigest()
 
 
@@ -474,10 +476,12 @@ def run_batch(scene, variants, out_dir, out_rate=None, every=None, duration=None
             client = Client(own_cluster)
         try:
             futures = {}
+            batch_id = uuid.uuid4().hex[:8]  # a task key of an earlier batch is never reused
             for vid, ov, path, key in todo:
                 fut = client.submit(run_variant, scene, ov, out_rate, path, duration, every,
-                                    guard, keep_velocities, key, key="corde-%s-%s" % (
-                                        vid, key[:16]), pure=False, retries=retries)
+                                    guard, keep_velocities, key,
+                                    key="corde-%s-%s" % (vid, batch_id), pure=False,
+                                    retries=retries)
                 futures[fut] = vid
             last_write = time.perf_counter()
             for fut in as_completed(list(futures)):

@@ -108,9 +108,33 @@ py::dict equilibrium_dict(const corde::SceneEquilibrium& eq, const std::string& 
   return d;
 }
 
-corde::RunOptions run_options(bool guard) {
+// The guard: on or off, and the settings a dict names (GuardSettings' fields).
+corde::RunOptions run_options(bool guard, const py::dict& settings) {
   corde::RunOptions options;
-  options.guard.enabled = guard;
+  corde::GuardSettings& g = options.guard;
+  g.enabled = guard;
+  for (const auto& kv : settings) {
+    const std::string key = py::str(kv.first);
+    const py::handle v = kv.second;
+    if (key == "check_every")
+      g.check_every = v.cast<int>();
+    else if (key == "max_halvings")
+      g.max_halvings = v.cast<int>();
+    else if (key == "allow_implicit")
+      g.allow_implicit = v.cast<bool>();
+    else if (key == "energy_tolerance")
+      g.energy_tolerance = v.cast<double>();
+    else if (key == "energy_floor")
+      g.energy_floor = v.cast<double>();
+    else if (key == "relax_after")
+      g.relax_after = v.cast<double>();
+    else
+      throw std::invalid_argument("guard: unknown setting '" + key +
+                                  "' (known: check_every, max_halvings, allow_implicit, "
+                                  "energy_tolerance, energy_floor, relax_after)");
+  }
+  if (g.check_every < 1 || g.max_halvings < 0)
+    throw std::invalid_argument("guard: check_every must be >= 1 and max_halvings >= 0");
   return options;
 }
 
@@ -152,17 +176,19 @@ PYBIND11_MODULE(_core, m) {
   py::class_<SceneSimulation>(m, "_Simulation")
       .def_static(
           "load",
-          [](const std::string& path, const std::vector<std::string>& overrides, bool guard) {
-            return SceneSimulation::load(path, overrides, run_options(guard));
+          [](const std::string& path, const std::vector<std::string>& overrides, bool guard,
+             const py::dict& settings) {
+            return SceneSimulation::load(path, overrides, run_options(guard, settings));
           },
-          py::arg("path"), py::arg("overrides"), py::arg("guard"))
+          py::arg("path"), py::arg("overrides"), py::arg("guard"), py::arg("settings"))
       .def_static(
           "parse",
           [](const std::string& yaml, const std::vector<std::string>& overrides,
-             const std::string& source, bool guard) {
-            return SceneSimulation::parse(yaml, overrides, source, run_options(guard));
+             const std::string& source, bool guard, const py::dict& settings) {
+            return SceneSimulation::parse(yaml, overrides, source, run_options(guard, settings));
           },
-          py::arg("yaml"), py::arg("overrides"), py::arg("source"), py::arg("guard"))
+          py::arg("yaml"), py::arg("overrides"), py::arg("source"), py::arg("guard"),
+          py::arg("settings"))
       .def("step", &SceneSimulation::step, py::arg("n"), py::call_guard<py::gil_scoped_release>())
       .def("run", &SceneSimulation::run, py::arg("duration"),
            py::call_guard<py::gil_scoped_release>())

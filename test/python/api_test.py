@@ -210,6 +210,21 @@ class BadInput(unittest.TestCase):
         self.assertIn(problem, err)
 
 
+    def test_guard_gives_up(self):
+        """The guard kept from the implicit method cannot cure a step 1000x above the explicit
+        limit: GuardError, the state at the last good one (finite, at a snapshot's time)."""
+        sim = corde_sim.load(scene("v5_pendulum"), {"time_step": 4e-3},
+                             guard={"allow_implicit": False})
+        with self.assertRaisesRegex(corde_sim.GuardError,
+                                    "could not recover .* t = 0 s: .*unrecoverable"):
+            sim.step(50)
+        self.assertTrue(np.all(np.isfinite(sim.positions())))
+        self.assertEqual(sim.time, 0.0)
+        self.assertEqual(sim.guard_events()[-1]["kind"], "unrecoverable")
+        with self.assertRaisesRegex(ValueError, "guard: unknown setting 'allow'"):
+            corde_sim.load(scene("v5_pendulum"), guard={"allow": False})
+
+
 class SceneInCode(unittest.TestCase):
     def test_dict_scene(self):
         """A scene built as a dict gives the same run as the same scene in a file."""

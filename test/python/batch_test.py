@@ -223,6 +223,22 @@ class Batch(unittest.TestCase):
             batch.run_variant(SCENE, ov, None, os.path.join(ref, vid + ".h5"), every=100)
             assert_same_file(self, os.path.join(d, vid + ".h5"), os.path.join(ref, vid + ".h5"))
 
+    def test_d_scheduler_address(self):
+        """corde_batch --scheduler runs on a cluster that is already there."""
+        d = os.path.join(self.tmp, "scheduler")
+        os.makedirs(d)
+        sweep = os.path.join(d, "s.yaml")
+        with open(sweep, "w") as f:
+            f.write("scene: %s\nevery: 50\ngrid:\n  rods.cable.elements: [6, 7, 8]\n" % SCENE)
+        exe = os.path.join(ROOT, "scripts", "corde_batch")
+        p = subprocess.run([sys.executable, exe, sweep, "--scheduler",
+                            self.cluster.scheduler_address, "--out", "r", "--no-progress"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=d)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("3 of 3 variants ok", p.stdout)
+        r = batch.read_result(os.path.join(d, "r", "v0002.h5"))
+        self.assertEqual(r["rods"][0]["positions"].shape, (7, 9, 3))  # 300 steps, every 50
+
 
 class Sweeps(unittest.TestCase):
     def test_seeded_draws(self):
