@@ -152,10 +152,11 @@ def find_corde_run(given: Optional[str] = None) -> str:
 
 
 def _api_available() -> bool:
+    """Whether the extension corde_sim._core is built (the package imports without it)."""
     try:
-        import corde_sim  # noqa: F401
-        return hasattr(corde_sim, "load")
-    except Exception:
+        from corde_sim import _core  # noqa: F401
+        return True
+    except ImportError:
         return False
 
 
