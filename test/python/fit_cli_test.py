@@ -84,6 +84,26 @@ class Bag(unittest.TestCase):
             self.assertEqual(run.returncode, 0, run.stderr)
 
 
+class Backends(unittest.TestCase):
+    def test_corde_run_gives_the_api_fit(self):
+        # Without the extension the runs go through corde_run (its CSV has 9 digits): the same
+        # fit to 1e-4.
+        with tempfile.TemporaryDirectory() as tmp:
+            rec = os.path.join(tmp, "rec.csv")
+            p = corde_fit("record", SCENE, rec, "--points", "10", "--every", "0.1", "--seed", "3")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            fitted = {}
+            for backend in ("api", "cli"):
+                out = os.path.join(tmp, backend + ".yaml")
+                p = corde_fit(SCENE, rec, "--fit", "E", "--initial", "E=4e7", "--backend", backend,
+                              "--out", out)
+                self.assertEqual(p.returncode, 0, p.stderr)
+                fitted[backend] = F.load_scene_yaml(out)["rods"][0]["material"]["E"]
+            print(fitted, file=sys.stderr)
+            self.assertLess(abs(fitted["cli"] / fitted["api"] - 1), 1e-4)
+            self.assertLess(abs(fitted["api"] / 3e7 - 1), 0.02)
+
+
 class BadInput(unittest.TestCase):
     def test_messages(self):
         with tempfile.TemporaryDirectory() as tmp:
