@@ -24,16 +24,19 @@ from typing import Callable, Dict, List, Optional
 import numpy as np
 import yaml
 
-from .fit_recording import (FitError, Recording, grasp_segment, gripper_keyframes,  # noqa: F401
+from .fit_recording import (FitError, Recording, ToolChain, grasp_segment,  # noqa: F401
+                            gripper_keyframes,
                             read_bag_recording, read_csv_recording, read_recording,
                             write_bag_recording, write_csv_recording, write_keyframe_csv)
 from .fit_sim import (Job, find_corde_run, get_key, load_scene_yaml, markers,  # noqa: F401
-                      node_arc_lengths, project_arc_lengths, rod_length, set_key, simulate,
+                      node_arc_lengths, project_arc_lengths, refine_arc_lengths, rod_length,
+                      set_key, simulate,
                       synthesize, yaml_load)
 
 # The identification's interface; recordings and runs come from fit_recording and fit_sim.
 __all__ = [
-    "PARAMETERS", "Parameter", "FitError", "FitResult", "Recording", "Job", "fit", "simulate",
+    "PARAMETERS", "Parameter", "FitError", "FitResult", "Recording", "ToolChain", "Job", "fit",
+    "simulate",
     "synthesize", "markers", "node_arc_lengths", "project_arc_lengths", "rod_length",
     "read_recording", "read_csv_recording", "write_csv_recording", "read_bag_recording",
     "write_bag_recording", "gripper_keyframes", "grasp_segment", "write_keyframe_csv",
@@ -241,7 +244,8 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
                            f"got {p.initial}")
     executor = executor or SerialExecutor()
     rec = copy.copy(rec)
-    if rec.arc_lengths is None:
+    projected = rec.arc_lengths is None
+    if projected:
         nodes, _ = simulate(Job(scene, {**overrides, **{p.key: p.initial for p in params}}, rod,
                                 np.array([rec.times[0]]), backend, corde_run, statics=statics))
         rec.arc_lengths = project_arc_lengths(rec.points[0], nodes[0])
@@ -251,64 +255,75 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
     undetermined: Dict[str, str] = {}
     runs = iterations = 0
     values = {p.name: p.initial for p in params}
-    while True:
-        prob = Problem(scene, rec, active, rod,
-                       {**overrides, **{p.key: p.initial for p in params if p not in active}},
-                       backend, corde_run, executor, diff_step=diff_step, statics=statics)
-        x0 = np.log([values[p.name] for p in active])
-        # parameters the recording does not depend on at all: refused before fitting
-        J0 = prob.jacobian(x0)
-        norms = np.linalg.norm(J0, axis=0)
-        dead = [p for p, nrm in zip(active, norms) if nrm <= 1e-6 * max(norms.max(), 1e-300)]
-        for p in dead:
-            undetermined[p.name] = ("the recording does not depend on it (the simulated points "
-                                    "do not move when it changes): nothing in the motion "
-                                    "excites it")
-        active = [p for p in active if p not in dead]
-        if dead:
+    for rnd in range(2 if projected else 1):
+        while True:
+            prob = Problem(scene, rec, active, rod,
+                           {**overrides, **{p.key: p.initial for p in params if p not in active}},
+                           backend, corde_run, executor, diff_step=diff_step, statics=statics)
+            x0 = np.log([values[p.name] for p in active])
+            # parameters the recording does not depend on at all: refused before fitting
+            J0 = prob.jacobian(x0)
+            norms = np.linalg.norm(J0, axis=0)
+            dead = [p for p, nrm in zip(active, norms) if nrm <= 1e-6 * max(norms.max(), 1e-300)]
+            for p in dead:
+                undetermined[p.name] = ("the recording does not depend on it (the simulated points "
+                                        "do not move when it changes): nothing in the motion "
+                                        "excites it")
+            active = [p for p in active if p not in dead]
+            if dead:
+                runs += prob.runs
+                if not active:
+                    break
+                continue
+            res = optimize.least_squares(prob.residuals, x0, jac=prob.jacobian, method="trf",
+                                         x_scale=1.0, max_nfev=max_iterations,
+                                         bounds=(x0 - math.log(1e3), x0 + math.log(1e3)),
+                                         ftol=1e-8, xtol=1e-8, gtol=1e-8)
+            iterations += res.nfev
+            theta = res.x
+            r = prob.residuals(theta)
+            J = prob.jacobian(theta)
             runs += prob.runs
+            dof = len(r) - len(active)
+            cov, sv, s2 = _covariance(J, r, dof)
+            tq = stats.t.ppf(0.5 + confidence / 2, max(dof, 1))
+            half = tq * np.sqrt(np.diag(cov))
+            for p, th in zip(active, theta):
+                values[p.name] = float(np.exp(th))
+            bad = [j for j in range(len(active)) if not (half[j] <= math.log(max_ci_factor))]
+            if not bad:
+                break
+            # refuse the worst one, fit again without it
+            j = max(bad, key=lambda k: half[k])
+            p = active[j]
+            sd = np.sqrt(np.diag(cov))
+            with np.errstate(invalid="ignore", divide="ignore"):
+                corr = cov / np.outer(sd, sd)
+            partner = ""
+            if np.isfinite(half[j]):
+                c = [(abs(corr[j, k]), active[k].name) for k in range(len(active)) if k != j]
+                c = [x for x in c if np.isfinite(x[0])]
+                if c and max(c)[0] > 0.9:
+                    partner = (f"; it trades off against {max(c)[1]} (correlation "
+                               f"{max(c)[0]:.3f}): the recording sees only their combination")
+            span = (f"a factor {math.exp(half[j]):.3g}" if half[j] < math.log(1e6) else
+                    "more than a factor 1e6")
+            undetermined[p.name] = (f"its {confidence:.0%} interval would span {span} either way "
+                                    f"(limit {max_ci_factor:g}){partner}")
+            values[p.name] = p.initial
+            active = [q for q in active if q is not p]
             if not active:
                 break
-            continue
-        res = optimize.least_squares(prob.residuals, x0, jac=prob.jacobian, method="trf",
-                                     x_scale=1.0, max_nfev=max_iterations,
-                                     bounds=(x0 - math.log(1e3), x0 + math.log(1e3)),
-                                     ftol=1e-8, xtol=1e-8, gtol=1e-8)
-        iterations += res.nfev
-        theta = res.x
-        r = prob.residuals(theta)
-        J = prob.jacobian(theta)
-        runs += prob.runs
-        dof = len(r) - len(active)
-        cov, sv, s2 = _covariance(J, r, dof)
-        tq = stats.t.ppf(0.5 + confidence / 2, max(dof, 1))
-        half = tq * np.sqrt(np.diag(cov))
-        for p, th in zip(active, theta):
-            values[p.name] = float(np.exp(th))
-        bad = [j for j in range(len(active)) if not (half[j] <= math.log(max_ci_factor))]
-        if not bad:
-            break
-        # refuse the worst one, fit again without it
-        j = max(bad, key=lambda k: half[k])
-        p = active[j]
-        sd = np.sqrt(np.diag(cov))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = cov / np.outer(sd, sd)
-        partner = ""
-        if np.isfinite(half[j]):
-            c = [(abs(corr[j, k]), active[k].name) for k in range(len(active)) if k != j]
-            c = [x for x in c if np.isfinite(x[0])]
-            if c and max(c)[0] > 0.9:
-                partner = (f"; it trades off against {max(c)[1]} (correlation "
-                           f"{max(c)[0]:.3f}): the recording sees only their combination")
-        span = (f"a factor {math.exp(half[j]):.3g}" if half[j] < math.log(1e6) else
-                "more than a factor 1e6")
-        undetermined[p.name] = (f"its {confidence:.0%} interval would span {span} either way "
-                                f"(limit {max_ci_factor:g}){partner}")
-        values[p.name] = p.initial
-        active = [q for q in active if q is not p]
-        if not active:
-            break
+        if rnd == 0 and projected and active:
+            # The projection at the first frame carries that frame's noise; the points' arc
+            # lengths fitted to every frame of the fitted cable (a cheap 1-D search each), then
+            # the parameters fitted again from where they are.
+            nodes, _ = simulate(Job(scene, {**overrides, **{p.key: values[p.name] for p in params}},
+                                    rod, rec.times, backend, corde_run, statics=statics))
+            runs += 1
+            rec.arc_lengths = refine_arc_lengths(rec.points, nodes)
+            log("arc lengths fitted to every frame: "
+                + ", ".join(f"{s:.4f}" for s in rec.arc_lengths) + " m")
     names = [p.name for p in params]
     ci, frame_rms, corr_full = {}, np.zeros(len(rec.times)), None
     rms = sigma = float("nan")

@@ -11,7 +11,7 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
-from .fit import (PARAMETERS, FitError, Job, Parameter, fit, get_key, grasp_segment,
+from .fit import (PARAMETERS, FitError, Job, Parameter, ToolChain, fit, get_key, grasp_segment,
                   gripper_keyframes, load_scene_yaml, make_executor, material_file_data,
                   read_recording, report_text, rod_length, simulate, synthesize,
                   write_bag_recording, write_csv_recording, write_fitted_scene,
@@ -171,8 +171,13 @@ def main(argv=None) -> int:
                              "recording's, else projected onto the rod at the first frame")
         ap.add_argument("--points-topic", default="/cable/points")
         ap.add_argument("--gripper-topic", default=None,
-                        help="geometry_msgs/PoseStamped topic moving --grasp (a .bag)")
+                        help="geometry_msgs/PoseStamped or sensor_msgs/JointState topic moving "
+                             "--grasp (a .bag)")
         ap.add_argument("--grasp", default=None, help="grasp moved by the recorded gripper")
+        ap.add_argument("--urdf", default=None,
+                        help="robot description, for a gripper topic of joint states")
+        ap.add_argument("--tool-link", default=None,
+                        help="the URDF link holding the cable (with --urdf)")
         ap.add_argument("--keyframe-rate", type=float, default=50.0,
                         help="gripper poses per second turned into keyframes")
         ap.add_argument("--out", default=None,
@@ -207,7 +212,13 @@ def _main_fit(a) -> int:
     ov = _overrides_of(a.set)
     _check_fixed_step(doc, ov, a.scene)
     rod = _scene_rod(doc, a.rod)
-    rec = read_recording(a.recording, a.points_topic, a.gripper_topic)
+    tool = None
+    if a.urdf or a.tool_link:
+        if not (a.urdf and a.tool_link):
+            raise FitError("--urdf and --tool-link go together (the robot and the link that "
+                           "holds the cable)")
+        tool = ToolChain(a.urdf, a.tool_link)
+    rec = read_recording(a.recording, a.points_topic, a.gripper_topic, tool)
     if a.arc_lengths:
         try:
             rec.arc_lengths = np.array([float(v) for v in a.arc_lengths.split(",")])

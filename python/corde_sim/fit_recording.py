@@ -111,11 +111,66 @@ def read_csv_recording(path: str) -> Recording:
     return rec
 
 
+class ToolChain:
+    """Forward kinematics of a URDF from its root link to one link (the gripper's tool frame):
+    fixed, revolute, continuous and prismatic joints, origins as xyz + rpy (fixed axes), as
+    robot_state_publisher computes them. The root link is taken to be the world frame."""
+
+    def __init__(self, urdf_path: str, tool_link: str):
+        import xml.etree.ElementTree as ET
+
+        try:
+            root = ET.parse(urdf_path).getroot()
+        except (OSError, ET.ParseError) as e:
+            raise FitError(f"{urdf_path}: cannot read the URDF: {e}") from None
+        joints = {}
+        for j in root.findall("joint"):
+            child = j.find("child").get("link")
+            o = j.find("origin")
+            xyz = [float(v) for v in (o.get("xyz", "0 0 0") if o is not None else "0 0 0").split()]
+            rpy = [float(v) for v in (o.get("rpy", "0 0 0") if o is not None else "0 0 0").split()]
+            a = j.find("axis")
+            axis = [float(v) for v in (a.get("xyz") if a is not None else "1 0 0").split()]
+            joints[child] = (j.get("name"), j.get("type"), j.find("parent").get("link"),
+                             np.array(xyz), np.array(rpy), np.array(axis) / np.linalg.norm(axis))
+        links = {lk.get("name") for lk in root.findall("link")}
+        if tool_link not in links:
+            raise FitError(f"{urdf_path}: no link '{tool_link}' (links: "
+                           f"{', '.join(sorted(links))})")
+        self.chain = []  # root to tool
+        link = tool_link
+        while link in joints:
+            self.chain.insert(0, joints[link])
+            link = joints[link][2]
+        self.moving = [j[0] for j in self.chain if j[1] in ("revolute", "continuous", "prismatic")]
+        for j in self.chain:
+            if j[1] not in ("fixed", "revolute", "continuous", "prismatic"):
+                raise FitError(f"{urdf_path}: joint '{j[0]}' is {j[1]}; the tool's chain may "
+                               f"have fixed, revolute, continuous and prismatic joints")
+
+    def pose(self, values: dict):
+        """The tool frame's (position (3,), quaternion [qx, qy, qz, qw]) for joint values."""
+        from scipy.spatial.transform import Rotation as R
+
+        p, r = np.zeros(3), R.identity()
+        for name, kind, _, xyz, rpy, axis in self.chain:
+            p = p + r.apply(xyz)
+            r = r * R.from_euler("xyz", rpy)
+            q = float(values.get(name, 0.0))
+            if kind in ("revolute", "continuous"):
+                r = r * R.from_rotvec(axis * q)
+            elif kind == "prismatic":
+                p = p + r.apply(axis * q)
+        return p, r.as_quat()
+
+
 def read_bag_recording(path: str, points_topic: str = "/cable/points",
-                       gripper_topic: Optional[str] = None) -> Recording:
+                       gripper_topic: Optional[str] = None,
+                       tool: Optional[ToolChain] = None) -> Recording:
     """Reads a rosbag: tracked points as geometry_msgs/PoseArray (positions in order along the
     cable) or sensor_msgs/PointCloud2 (fields x, y, z, in order), the gripper as
-    geometry_msgs/PoseStamped. Times are the messages' header stamps minus the first points
+    geometry_msgs/PoseStamped, or as sensor_msgs/JointState turned into the tool frame's pose by
+    `tool` (forward kinematics). Times are the messages' header stamps minus the first points
     message's stamp (scene time 0)."""
     try:
         import rosbag  # python3-rosbag (Debian)
@@ -137,11 +192,27 @@ def read_bag_recording(path: str, points_topic: str = "/cable/points",
             if topic == points_topic:
                 times.append(st)
                 frames.append(_points_of_message(msg, path, topic))
-            else:
+            elif msg._type == "sensor_msgs/JointState":
+                if tool is None:
+                    raise FitError(f"{path}: '{topic}' has joint states: give the robot's URDF "
+                                   f"and its tool link (--urdf, --tool-link)")
+                values = dict(zip(msg.name, msg.position))
+                missing = [j for j in tool.moving if j not in values]
+                if missing:
+                    raise FitError(f"{path}: '{topic}' at {st:.6f} s: no value for joint "
+                                   f"'{missing[0]}' of the tool's chain")
+                p, q = tool.pose(values)
+                gt.append(st)
+                gp.append(list(p))
+                gq.append(list(q))
+            elif msg._type == "geometry_msgs/PoseStamped":
                 p, q = msg.pose.position, msg.pose.orientation
                 gt.append(st)
                 gp.append([p.x, p.y, p.z])
                 gq.append([q.x, q.y, q.z, q.w])
+            else:
+                raise FitError(f"{path}: '{topic}' has {msg._type}; the gripper must be "
+                               f"geometry_msgs/PoseStamped or sensor_msgs/JointState")
     if not frames:
         raise FitError(f"{path}: no messages on '{points_topic}'")
     m = {len(f) for f in frames}
@@ -173,18 +244,31 @@ def _points_of_message(msg, path, topic):
 
 def write_bag_recording(path: str, rec: Recording, points_topic: str = "/cable/points",
                         gripper_topic: str = "/gripper/pose", frame_id: str = "world",
-                        start: float = 1.0) -> None:
+                        start: float = 1.0, joints: Optional[tuple] = None,
+                        joint_topic: str = "/joint_states") -> None:
     """Writes a recording as a rosbag in the format read_bag_recording reads (PoseArray points,
-    PoseStamped gripper), stamped from `start` s (a bag cannot hold time 0)."""
+    PoseStamped gripper), stamped from `start` s (a bag cannot hold time 0). joints: (times (K,),
+    names, values (K, J)) written as sensor_msgs/JointState on joint_topic."""
     import rosbag
     import rospy
     from geometry_msgs.msg import Pose, PoseArray, PoseStamped
+    from sensor_msgs.msg import JointState
 
     with rosbag.Bag(path, "w") as bag:
         events = [(t, 0, i) for i, t in enumerate(rec.times)]
         if rec.gripper is not None:
             events += [(t, 1, i) for i, t in enumerate(rec.gripper[0])]
+        if joints is not None:
+            events += [(t, 2, i) for i, t in enumerate(joints[0])]
         for t, kind, i in sorted(events):
+            if kind == 2:
+                stamp = rospy.Time.from_sec(start + t)
+                msg = JointState()
+                msg.header.stamp = stamp
+                msg.name = list(joints[1])
+                msg.position = [float(v) for v in joints[2][i]]
+                bag.write(joint_topic, msg, stamp)
+                continue
             stamp = rospy.Time.from_sec(start + t)
             if kind == 0:
                 msg = PoseArray()
@@ -206,9 +290,10 @@ def write_bag_recording(path: str, rec: Recording, points_topic: str = "/cable/p
 
 
 def read_recording(path: str, points_topic: str = "/cable/points",
-                   gripper_topic: Optional[str] = None) -> Recording:
+                   gripper_topic: Optional[str] = None,
+                   tool: Optional[ToolChain] = None) -> Recording:
     if path.endswith(".bag"):
-        return read_bag_recording(path, points_topic, gripper_topic)
+        return read_bag_recording(path, points_topic, gripper_topic, tool)
     if gripper_topic:
         raise FitError(f"{path}: a CSV recording has no gripper poses; the scene's grasp "
                        f"keyframes give the motion (use a rosbag for recorded poses)")

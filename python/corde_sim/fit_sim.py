@@ -327,6 +327,27 @@ def project_arc_lengths(points0: np.ndarray, nodes0: np.ndarray) -> np.ndarray:
     return s_fine[np.argmin(d, axis=1)]
 
 
+def refine_arc_lengths(points: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+    """Arc lengths (M,) of tracked points (F, M, 3) that fit the simulated rod (F, N+1, 3) best
+    over every frame: per point, the least sum of squared distances over a grid of 20 samples per
+    segment, refined by a parabola through the best sample and its neighbours."""
+    s_nodes = node_arc_lengths(nodes[0])
+    grid = np.linspace(0.0, s_nodes[-1], 20 * (nodes.shape[1] - 1) + 1)
+    curve = markers(nodes, s_nodes, grid)  # (F, G, 3)
+    out = np.empty(points.shape[1])
+    for i in range(points.shape[1]):
+        cost = np.sum((curve - points[:, i:i + 1, :]) ** 2, axis=(0, 2))
+        k = int(np.argmin(cost))
+        s = grid[k]
+        if 0 < k < len(grid) - 1:
+            c0, c1, c2 = cost[k - 1], cost[k], cost[k + 1]
+            den = c0 - 2 * c1 + c2
+            if den > 0:
+                s += 0.5 * (c0 - c2) / den * (grid[1] - grid[0])
+        out[i] = s
+    return out
+
+
 def synthesize(scene: str, overrides: Dict[str, object], rod: str, times: np.ndarray,
                arc_lengths: np.ndarray, noise: float, seed: int, backend: str = "auto",
                corde_run: Optional[str] = None, gripper_segment: Optional[int] = None,
