@@ -52,6 +52,8 @@ packages=(
   # the Python module corde_sim (pybind11) and corde_batch (Dask, HDF5, sweep files):
   # docs/python.md
   pybind11-dev python3-dev python3-setuptools python3-yaml python3-distributed python3-h5py
+  # corde_fit (docs/calibration.md): SciPy's least squares, recordings from rosbags
+  python3-rosbag
 )
 
 for arg in "$@"; do
