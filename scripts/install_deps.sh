@@ -36,6 +36,8 @@ packages=(
   # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
   python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
   python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
+  # recording rod_state and the reactions (launch/corde_sim.launch record:=true: rosbag record)
+  python3-rosbag
   # robot example (launch/robot_example.launch): robot description, joint and link tf
   ros-robot-state-publisher joint-state-publisher liburdf-dev
   # python nodes and rostests (scripts/demo_arm_motion.py, test/ros/*_test.py) and command-line
