@@ -36,6 +36,8 @@ packages=(
   # ROS 1 runtime: master, launch, rosout, rostest (python) and rostest's CMake macros
   python3-rosmaster python3-roslaunch python3-rosgraph python3-rospy python3-rosunit
   python3-rostest librostest-dev rosout rosbash python3-rostopic python3-rosservice
+  # recording rod_state and the reactions (launch/corde_sim.launch record:=true: rosbag record)
+  python3-rosbag
   # robot example (launch/robot_example.launch): robot description, joint and link tf
   ros-robot-state-publisher joint-state-publisher liburdf-dev
   # python nodes and rostests (scripts/demo_arm_motion.py, test/ros/*_test.py) and command-line
@@ -52,8 +54,7 @@ packages=(
   # the Python module corde_sim (pybind11) and corde_batch (Dask, HDF5, sweep files):
   # docs/python.md
   pybind11-dev python3-dev python3-setuptools python3-yaml python3-distributed python3-h5py
-  # corde_fit (docs/calibration.md): SciPy's least squares, recordings from rosbags
-  python3-rosbag
+  # corde_fit (docs/calibration.md) uses python3-scipy and python3-rosbag, listed above
 )
 
 for arg in "$@"; do

@@ -485,7 +485,7 @@ void fill_rod_states(const corde::World& world, WorldState* msg) {
       out.tension[s] = rod.tension(s);
     }
     out.max_strain = rod.max_stretch_strain();
-    const corde::Energies e = rod.energies(world.gravity);
+    const corde::Energies e = rod.energies(world.gravity_at(world.time()));
     out.kinetic_energy = e.kinetic();
     out.elastic_energy = e.elastic();
   }

@@ -84,6 +84,28 @@ class Rod {
   void set_rotational_inertia_scale(double scale);
   double rotational_inertia_scale() const { return inertia_scale_; }
 
+  // What a real cable carries besides its section (docs/scene_format.md, "Cable bodies"): every
+  // part of the model reads masses and inertia through node_masses() and segment_inertia(), so
+  // these reach the steps, the explicit step limit, energies, momentum, gravity and statics.
+  // A point mass (kg, > 0) added to a node's lumped mass: a clip, a connector. Adds up.
+  void add_node_mass(int node, double mass);
+  // A rotary inertia (kg m^2, body frame: about d1, d2, d3) added to a segment's: a rigid body
+  // fixed to it (a plug on an end segment). d1 and d2 must be equal (the segments are
+  // axisymmetric: the split rotation turns them in closed form). Adds up.
+  void add_segment_inertia(int segment, const Vec3& inertia);
+  // Per-segment factors on the section's mass per length and rotary inertia per length (a cable
+  // that is not uniform: a heavier stretch, a ferrite bead), one per segment, each finite and
+  // > 0; empty: uniform (the default).
+  void set_segment_mass_scale(const std::vector<double>& scale);
+  const std::vector<double>& segment_mass_scale() const { return mass_scale_; }
+  // The added point masses per node and inertias per segment (empty: none).
+  const std::vector<double>& added_node_masses() const { return added_mass_; }
+  const std::vector<Vec3>& added_segment_inertias() const { return added_inertia_; }
+  // Each node's share of the uniform section's mass (half of each adjacent segment's rest length
+  // times the section's mass per length), without point masses or mass scales: the length of rod
+  // a node stands for in the air drag is this over the section's mass per length (model/drag.h).
+  const std::vector<double>& node_section_masses() const { return section_mass_; }
+
   // Boundary conditions and loads. Adding a drive makes the node or segment kinematic.
   void add_node_drive(const NodeDrive& d);
   void add_segment_drive(const SegmentDrive& d);
@@ -187,9 +209,12 @@ class Rod {
   std::vector<Vec3> x_, v_, f_;
   std::vector<Quat> q_;
   std::vector<Vec3> w_, tau_;
-  std::vector<double> rest_, rest_elem_, mass_, inv_mass_;
+  std::vector<double> rest_, rest_elem_, mass_, inv_mass_, section_mass_;
   std::vector<Vec3> inertia_, uhat_;
   double inertia_scale_ = 1.0;  // set_rotational_inertia_scale
+  // add_node_mass, add_segment_inertia, set_segment_mass_scale: empty until set.
+  std::vector<double> added_mass_, mass_scale_;
+  std::vector<Vec3> added_inertia_;
 
   // Constants precomputed from the rest lengths and the section (the step divides by nothing of
   // them), one array each so that the step's loops read unit-stride streams and vectorise.

@@ -22,8 +22,9 @@ void set_retardation_time(Material* m, double radius, double tau);
 // world angular velocities, stretch and rest strains linearly, orientations by slerp between
 // segment midpoints and then turned so that d3 follows the new chord. Each segment's rest length
 // keeps the local stretch, so the total rest length changes by the chord-versus-arc difference,
-// O((l kappa)^2) relative, and a rod at rest stays nearly at rest. Drives, loads and ghost frames
-// move to the node or segment at the same s (ends stay ends); two drives landing on one index keep
+// O((l kappa)^2) relative, and a rod at rest stays nearly at rest. Drives, loads, ghost frames,
+// point masses and added inertias move to the node or segment at the same s (mass scales: the old
+// segment's at the new midpoint) (ends stay ends); two drives landing on one index keep
 // the last. Throws std::invalid_argument if elements < 1.
 Rod resample_rod(const Rod& rod, int elements);
 

@@ -22,6 +22,8 @@ struct SceneBounds {
   static constexpr double max_acceleration = 1.0e4;   // m/s^2: gravity (about 1000 g)
   static constexpr double max_force = 1.0e12;         // N: loads (each component)
   static constexpr double max_torque = 1.0e12;        // N m
+  static constexpr double max_mass = 1.0e6;           // kg: point masses at nodes
+  static constexpr double max_inertia = 1.0e6;        // kg m^2: a body's rotary inertia
   // Pa: E, G, E_s. Far beyond any material (diamond: 1.2e12 Pa), as the guard's tests use
   // impossible stiffnesses; with radii within max_length their products stay finite.
   static constexpr double max_modulus = 1.0e30;

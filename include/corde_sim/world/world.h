@@ -23,6 +23,16 @@ struct WorldEnergies {
 class World {
  public:
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);
+  // Gravity grows linearly from zero at t = 0 to `gravity` at t = gravity_ramp (s) and stays
+  // there; 0: whole from the start (the default). Ramping it in keeps a cable created straight
+  // from ringing as it sags.
+  double gravity_ramp = 0.0;
+  // The gravity acting at time t: `gravity` itself (the same value, bit for bit) without a ramp
+  // or from the ramp's end on.
+  Vec3 gravity_at(double t) const {
+    if (!(gravity_ramp > 0.0) || t >= gravity_ramp) return gravity;
+    return (t > 0.0 ? t / gravity_ramp : 0.0) * gravity;
+  }
   double time_step = 1e-4;  // s
   // How the rods are stepped (rod.h): the explicit methods (nodes by semi-implicit Euler, the
   // segments' rotations as named), or backward Euler (kImplicitEuler) or BDF2 (kBdf2) of
@@ -65,6 +75,7 @@ class World {
     for (int i = 0; i < n; ++i) step();
   }
   bool finite() const;
+  // The rods' energies, gravity's potential under gravity_at(time()).
   WorldEnergies energies() const;
   // Copies this world into *out (a snapshot, or a restore from one), the contact stage's
   // warm-start impulses included but not shared: a plain copy shares the contact stage, and the

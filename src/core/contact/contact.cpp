@@ -143,7 +143,7 @@ bool ContactSystem::retake_closing(World& world, double h, ContactResponse& resp
     if (vr.dot(c.normal) >= normal_target(c, world.contact, h)) continue;
     for (int r : {c.rod_a, c.rod_b}) {
       if (r < 0 || !response.may_retake(r)) continue;
-      response.retake(rods[r], r, world.time(), h, world.gravity);
+      response.retake(rods[r], r, world.time(), h, world.gravity_at(world.time() + h));
       retaken = true;
     }
   }

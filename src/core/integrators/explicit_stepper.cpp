@@ -6,10 +6,11 @@ namespace corde {
 
 void ExplicitStepper::free_step(World& world, bool contacts, const ContactSystem*) {
   const double t = world.time();
+  const Vec3 g = world.gravity_at(t);
   if (contacts) {
-    for (Rod& r : world.rods()) r.compute_forces(t, world.gravity);
+    for (Rod& r : world.rods()) r.compute_forces(t, g);
   } else {
-    for (Rod& r : world.rods()) r.step(t, world.time_step, world.gravity, rotation_);
+    for (Rod& r : world.rods()) r.step(t, world.time_step, g, rotation_);
   }
 }
 

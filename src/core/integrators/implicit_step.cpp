@@ -93,7 +93,8 @@ void ImplicitEuler::setup_dissipation(const Rod& rod, double h) {
     const double inv_mu = 1.0 / sec.mass_per_length;
     drag_.resize(nn);
     for (int i = 0; i < nn; ++i)
-      drag_[i] = drag_matrix(node_drag(rod.drag(), xd, i, vd[i], rod.node_masses()[i], inv_mu));
+      drag_[i] =
+          drag_matrix(node_drag(rod.drag(), xd, i, vd[i], rod.node_section_masses()[i], inv_mu));
   }
 }
 
@@ -657,6 +658,12 @@ void ImplicitEuler::parameters(const Rod& rod, std::vector<double>* out) {
   out->insert(out->end(), rod.rest_lengths().begin(), rod.rest_lengths().end());
   out->insert(out->end(), rod.node_masses().begin(), rod.node_masses().end());
   for (const Vec3& u : rod.rest_strains()) out->insert(out->end(), u.data(), u.data() + 3);
+  // Inertias that differ from the section's (a plug, a denser stretch: rod.h).
+  if (!rod.added_segment_inertias().empty() || !rod.segment_mass_scale().empty())
+    for (int s = 0; s < rod.num_segments(); ++s) {
+      const Vec3 in = rod.segment_inertia(s);
+      out->insert(out->end(), in.data(), in.data() + 3);
+    }
   // The clamps' ghost frames and rest strains enter the bending blocks (a turning clamp changes
   // them at every step).
   for (const GhostFrame* g : {&rod.ghost_start(), &rod.ghost_end()})

@@ -10,12 +10,14 @@ void ImplicitStepper::free_step(World& world, bool, const ContactSystem* last) {
   auto& rods = world.rods();
   steps_.resize(rods.size());
   results_.resize(rods.size());
+  // Backward Euler and BDF2 take gravity, like the loads, at the step's end.
+  const Vec3 g = world.gravity_at(world.time() + world.time_step);
   for (size_t r = 0; r < rods.size(); ++r) {
     steps_[r].set_options(world.implicit);
     steps_[r].set_second_order(second_order_);
     // Contacts' impulses of the last step as the prediction (they change little between steps).
     const int ri = static_cast<int>(r);
-    results_[r] = steps_[r].step(rods[r], world.time(), world.time_step, world.gravity,
+    results_[r] = steps_[r].step(rods[r], world.time(), world.time_step, g,
                                  last ? last->last_impulses(ri) : nullptr,
                                  last ? last->last_torque_impulses(ri) : nullptr);
   }

@@ -74,18 +74,62 @@ void Rod::set_rotational_inertia_scale(double scale) {
   update_mass_and_inertia();
 }
 
+void Rod::add_node_mass(int node, double mass) {
+  if (node < 0 || node >= num_nodes())
+    throw std::out_of_range("rod '" + name_ + "': no node " + std::to_string(node));
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw std::invalid_argument("rod '" + name_ + "': a point mass must be a finite number > 0");
+  if (added_mass_.empty()) added_mass_.assign(x_.size(), 0.0);
+  added_mass_[node] += mass;
+  update_mass_and_inertia();
+}
+
+void Rod::add_segment_inertia(int segment, const Vec3& inertia) {
+  if (segment < 0 || segment >= num_segments())
+    throw std::out_of_range("rod '" + name_ + "': no segment " + std::to_string(segment));
+  if (!inertia.allFinite() || (inertia.array() < 0.0).any() || inertia.x() != inertia.y())
+    throw std::invalid_argument("rod '" + name_ +
+                                "': an added inertia must be finite, >= 0 and equal about d1 "
+                                "and d2");
+  if (added_inertia_.empty()) added_inertia_.assign(q_.size(), Vec3::Zero());
+  added_inertia_[segment] += inertia;
+  update_mass_and_inertia();
+}
+
+void Rod::set_segment_mass_scale(const std::vector<double>& scale) {
+  if (!scale.empty() && scale.size() != q_.size())
+    throw std::invalid_argument("rod '" + name_ +
+                                "': mass scales: " + std::to_string(scale.size()) + " for " +
+                                std::to_string(q_.size()) + " segments");
+  for (double f : scale)
+    if (!(f > 0.0) || !std::isfinite(f))
+      throw std::invalid_argument("rod '" + name_ + "': mass scales must be finite and > 0");
+  mass_scale_ = scale;
+  update_mass_and_inertia();
+}
+
 void Rod::update_mass_and_inertia() {
   const size_t n = q_.size();
   mass_.assign(n + 1, 0.0);
+  section_mass_.assign(n + 1, 0.0);
   inv_mass_.resize(n + 1);
   inertia_.resize(n);
   for (size_t s = 0; s < n; ++s) {
     const double m = section_.mass_per_length * rest_[s];
-    mass_[s] += 0.5 * m;
-    mass_[s + 1] += 0.5 * m;
+    section_mass_[s] += 0.5 * m;
+    section_mass_[s + 1] += 0.5 * m;
     const double bend = inertia_scale_ * section_.inertia_bend;
     inertia_[s] = Vec3(bend, bend, section_.inertia_twist) * rest_[s];
+    if (!mass_scale_.empty()) {
+      const double ms = m * mass_scale_[s];
+      mass_[s] += 0.5 * ms;
+      mass_[s + 1] += 0.5 * ms;
+      inertia_[s] *= mass_scale_[s];
+    }
   }
+  if (mass_scale_.empty()) mass_ = section_mass_;
+  for (size_t i = 0; i < added_mass_.size(); ++i) mass_[i] += added_mass_[i];
+  for (size_t s = 0; s < added_inertia_.size(); ++s) inertia_[s] += added_inertia_[s];
   for (size_t i = 0; i <= n; ++i) inv_mass_[i] = 1.0 / mass_[i];
   inv_rest_.resize(n);
   gamma_t_inv_rest_.resize(n);
@@ -239,7 +283,7 @@ void Rod::set_drag(const Drag& d) {
 void Rod::drag_block(int node0, int node1) {
   const double inv_mu = 1.0 / section_.mass_per_length;
   for (int i = node0; i < node1; ++i)
-    f_[i] += drag_force(node_drag(drag_, x_, i, v_[i], mass_[i], inv_mu));
+    f_[i] += drag_force(node_drag(drag_, x_, i, v_[i], section_mass_[i], inv_mu));
 }
 
 void Rod::clear_external() {

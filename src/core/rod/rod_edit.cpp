@@ -196,6 +196,24 @@ Rod resample_rod(const Rod& rod, int elements) {
     load.index = load.kind == Load::Kind::kForce ? new_node(load.index) : new_segment(load.index);
     out.add_load(load);
   }
+  // Point masses and added inertias move with the material coordinate too; each new segment takes
+  // the mass scale of the old segment holding its midpoint.
+  const std::vector<double>& added_mass = rod.added_node_masses();
+  for (int i = 0; i < static_cast<int>(added_mass.size()); ++i)
+    if (added_mass[i] > 0.0) out.add_node_mass(new_node(i), added_mass[i]);
+  const std::vector<Vec3>& added_inertia = rod.added_segment_inertias();
+  for (int s = 0; s < static_cast<int>(added_inertia.size()); ++s)
+    if (added_inertia[s] != Vec3::Zero()) out.add_segment_inertia(new_segment(s), added_inertia[s]);
+  if (!rod.segment_mass_scale().empty()) {
+    std::vector<double> scale(elements);
+    for (int k = 0; k < elements; ++k) {
+      const double s = (k + 0.5) * l;
+      const int old =
+          static_cast<int>(std::upper_bound(node_s.begin(), node_s.end(), s) - node_s.begin()) - 1;
+      scale[k] = rod.segment_mass_scale()[std::min(std::max(old, 0), n_old - 1)];
+    }
+    out.set_segment_mass_scale(scale);
+  }
   out.set_drag(rod.drag());
   out.contact_options() = rod.contact_options();
   out.ghost_start() = rod.ghost_start();

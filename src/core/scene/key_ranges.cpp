@@ -46,6 +46,11 @@ const std::vector<KeyRange>& key_ranges() {
       {"fluid_density", 0.0, B::max_density, true, "kg/m^3", "density of the surrounding fluid"},
       {"drag_coefficient", 0.0, B::max_factor, true, "", "the cylinder's normal drag coefficient"},
       {"friction_coefficient", 0.0, B::max_factor, true, "", "its tangential skin friction"},
+      {"mass", 0.0, B::max_mass, false, "kg", "a point mass at a node (masses)"},
+      {"inertia_across", 0.0, B::max_inertia, true, "kg m^2",
+       "an end body's rotary inertia across the cable's axis"},
+      {"inertia_along", 0.0, B::max_inertia, true, "kg m^2",
+       "an end body's rotary inertia about the cable's axis"},
       // The node's dynamic_reconfigure parameters (cfg/Node.cfg declares the same ranges; a unit
       // test keeps the generated NodeConfig equal to these); the node's start-up parameters of
       // the same names are checked against them too (ros/node_params.h).

@@ -25,34 +25,6 @@ std::string stem(const std::string& path) {
   return dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
 }
 
-// Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
-// coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
-// q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
-// circumference). Bounded (scene/scene_bounds.h) so that these products stay finite.
-Drag read_drag(const Value& v, double radius) {
-  Map m(v);
-  Drag d;
-  if (auto p = m.find("linear_normal")) d.linear_normal = p->in_range("linear_normal");
-  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->in_range("linear_tangential");
-  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->in_range("quadratic_normal");
-  if (auto p = m.find("quadratic_tangential"))
-    d.quadratic_tangential = p->in_range("quadratic_tangential");
-  if (auto rho = m.find("fluid_density")) {
-    if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
-      rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
-    const double density = rho->in_range("fluid_density");
-    double cd = 1.2, cf = 0.0;
-    if (auto p = m.find("drag_coefficient")) cd = p->in_range("drag_coefficient");
-    if (auto p = m.find("friction_coefficient")) cf = p->in_range("friction_coefficient");
-    d.quadratic_normal = density * cd * radius;
-    d.quadratic_tangential = density * cf * M_PI * radius;
-  } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
-    m.fail("drag_coefficient and friction_coefficient need fluid_density");
-  }
-  m.finish();
-  return d;
-}
-
 // A `loads` entry: a force on a node or a torque on a segment, the index left unresolved.
 LoadDescription describe_load(const Value& entry) {
   Map m(entry);
@@ -71,6 +43,38 @@ LoadDescription describe_load(const Value& entry) {
   if (auto t = m.find("ramp_time")) l.ramp_time = t->non_negative(SceneBounds::max_time, "s");
   if (auto t = m.find("start_time")) l.t_start = t->non_negative(SceneBounds::max_time, "s");
   if (auto k = m.find("kind")) l.follower = k->choice({"dead", "follower"}) == "follower";
+  m.finish();
+  return d;
+}
+
+// A `masses` entry: a point mass at a node; at an end node also the rotary inertia of the rigid
+// body it stands for (a plug), across and along the cable's axis.
+MassDescription describe_mass(const Value& entry) {
+  Map m(entry);
+  MassDescription d;
+  d.path = entry.path();
+  d.at = describe_index(m.get("node"), "node");
+  d.mass = m.get("mass").in_range("mass");
+  for (const char* key : {"inertia_across", "inertia_along"})
+    if (auto v = m.find(key)) {
+      (std::string(key) == "inertia_across" ? d.inertia_across : d.inertia_along) =
+          v->in_range(key);
+      if (!d.inertia_key) d.inertia_key = v;
+    }
+  m.finish();
+  return d;
+}
+
+// A `density_ranges` entry: {from, to, rho}, from < to, arc lengths along the rest rod (m).
+DensityRange describe_density_range(const Value& entry) {
+  Map m(entry);
+  DensityRange d;
+  d.key = entry;
+  d.from = m.get("from").non_negative(SceneBounds::max_length, "m");
+  const Value to = m.get("to");
+  d.to = to.positive(SceneBounds::max_length, "m");
+  if (!(d.to > d.from)) to.fail("must be greater than from (" + num(d.from) + " m)");
+  d.rho = m.get("rho").in_range("rho");
   m.finish();
   return d;
 }
@@ -107,16 +111,24 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
   long total = spec.elements;
   for (const RodDescription& b : before) total += b.spec.elements;
   if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
-  spec.section = read_section(&m);
+  MaterialExtras extras;
+  spec.section = read_section(&m, base, &extras);
   r.shape_key = m.get("shape");
   spec.shape = read_shape(*r.shape_key);
   if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();
   if (auto p = m.find("rest_shape"))
     spec.rest_shape_created = p->choice({"straight", "created"}) == "created";
-  if (auto p = m.find("drag")) r.drag = read_drag(*p, spec.section.radius);
+  if (auto p = m.find("drag"))
+    r.drag = read_drag(*p, spec.section.radius);
+  else
+    r.drag = extras.drag;
   if (auto p = m.find("contact")) {
     r.contact.emplace();
     read_rod_contact(*p, &*r.contact);
+  }
+  if (extras.friction && !(r.contact && r.contact->friction >= 0.0)) {
+    if (!r.contact) r.contact.emplace();
+    r.contact->friction = *extras.friction;
   }
   std::optional<Value> state = m.find("initial_state");
   if (!state) state = default_state;
@@ -135,6 +147,20 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
   if (auto l = m.find("loads"))
     for (const Value& item : limited_items(*l, SceneLimits::max_items, "loads"))
       r.loads.push_back(describe_load(item));
+  if (auto l = m.find("masses"))
+    for (const Value& item : limited_items(*l, SceneLimits::max_items, "masses"))
+      r.masses.push_back(describe_mass(item));
+  if (auto l = m.find("density_ranges"))
+    for (const Value& item : limited_items(*l, SceneLimits::max_items, "ranges")) {
+      const DensityRange d = describe_density_range(item);
+      for (size_t j = 0; j < r.density_ranges.size(); ++j) {
+        const DensityRange& e = r.density_ranges[j];
+        if (d.from < e.to && e.from < d.to)
+          item.fail("overlaps " + e.key.path() + " ([" + num(e.from) + ", " + num(e.to) +
+                    "] m); give each stretch of the cable one density");
+      }
+      r.density_ranges.push_back(d);
+    }
   // A number >= 1, or auto (stability/explicit_step_limit.h, lifting_inertia_scale: computed on
   // the rod as built and held).
   if (auto p = m.find("rotational_inertia_scale")) {
@@ -153,6 +179,34 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
 }
 
 }  // namespace
+
+// Air drag of a rod: the coefficients per unit length, or a fluid's density with the drag
+// coefficients of the rod's cylinder (normal C_d, tangential skin friction C_f), which give
+// q_n = rho C_d r (1/2 rho C_d times the diameter) and q_t = rho C_f pi r (1/2 rho C_f times the
+// circumference). Bounded (scene/scene_bounds.h) so that these products stay finite.
+Drag read_drag(const Value& v, double radius) {
+  Map m(v);
+  Drag d;
+  if (auto p = m.find("linear_normal")) d.linear_normal = p->in_range("linear_normal");
+  if (auto p = m.find("linear_tangential")) d.linear_tangential = p->in_range("linear_tangential");
+  if (auto p = m.find("quadratic_normal")) d.quadratic_normal = p->in_range("quadratic_normal");
+  if (auto p = m.find("quadratic_tangential"))
+    d.quadratic_tangential = p->in_range("quadratic_tangential");
+  if (auto rho = m.find("fluid_density")) {
+    if (m.has("quadratic_normal") || m.has("quadratic_tangential"))
+      rho->fail("give either fluid_density or quadratic_normal/quadratic_tangential");
+    const double density = rho->in_range("fluid_density");
+    double cd = 1.2, cf = 0.0;
+    if (auto p = m.find("drag_coefficient")) cd = p->in_range("drag_coefficient");
+    if (auto p = m.find("friction_coefficient")) cf = p->in_range("friction_coefficient");
+    d.quadratic_normal = density * cd * radius;
+    d.quadratic_tangential = density * cf * M_PI * radius;
+  } else if (m.has("drag_coefficient") || m.has("friction_coefficient")) {
+    m.fail("drag_coefficient and friction_coefficient need fluid_density");
+  }
+  m.finish();
+  return d;
+}
 
 // The items of a list, failing when there are more than `limit` of them.
 std::vector<Value> limited_items(const Value& list, int limit, const char* what) {
@@ -199,6 +253,8 @@ SceneDescription describe_scene(const YAML::Node& root, const std::string& sourc
   if (auto v = top.find("name")) d.name = v->string();
   if (auto v = top.find("description")) d.description = v->string();
   if (auto v = top.find("gravity")) d.gravity = v->vec3(SceneBounds::max_acceleration, "m/s^2");
+  if (auto v = top.find("gravity_ramp"))
+    d.gravity_ramp = v->non_negative(SceneBounds::max_time, "s");
   if (auto v = top.find("integrator")) {
     std::vector<std::string> names = integrator_name_list();
     names.push_back("auto");

@@ -2,6 +2,7 @@
 // alone: the rods with their initial velocities, boundary, loads and rotational inertia scale,
 // then contact settings, obstacles and grasps, each entry's indices and keyframes resolved against
 // its built rod.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -26,6 +27,50 @@ void build_load(const LoadDescription& d, Rod* rod, std::vector<std::string>* wa
       warnings->push_back(d.path + ": torque on a driven segment has no effect");
   }
   rod->add_load(l);
+}
+
+// A point mass on its node; at an end node the body's inertia on the end segment.
+void build_mass(const MassDescription& d, Rod* rod) {
+  const int n = rod->num_segments();
+  const int node = resolve_index(d.at, n + 1, "node");
+  rod->add_node_mass(node, d.mass);
+  if (!d.inertia_key) return;
+  if (node != 0 && node != n)
+    d.inertia_key->fail(
+        "a rotary inertia needs an end node (start or end: the body is fixed to "
+        "the end segment), got node " +
+        std::to_string(node));
+  const double across = d.inertia_across;
+  rod->add_segment_inertia(node == 0 ? 0 : n - 1, Vec3(across, across, d.inertia_along));
+}
+
+// The density ranges as factors on the section's mass per length, each segment taking the mean
+// density over its rest length (mass conserved: a range boundary inside a segment splits it).
+void build_density(const std::vector<DensityRange>& ranges, const Section& section, Rod* rod) {
+  if (ranges.empty()) return;
+  const std::vector<double>& rest = rod->rest_lengths();
+  double length = 0.0;
+  for (double l : rest) length += l;
+  for (const DensityRange& r : ranges)
+    if (r.from >= length)
+      r.key.fail("starts at " + num(r.from) + " m, beyond the rod's rest length " + num(length) +
+                 " m");
+  const double area = M_PI * section.radius * section.radius;
+  std::vector<double> scale(rest.size());
+  double s0 = 0.0;
+  for (size_t s = 0; s < rest.size(); ++s) {
+    const double s1 = s0 + rest[s];
+    double covered = 0.0, mass = 0.0;  // per the section's density
+    for (const DensityRange& r : ranges) {
+      const double overlap = std::min(s1, r.to) - std::max(s0, r.from);
+      if (overlap <= 0.0) continue;
+      covered += overlap;
+      mass += overlap * r.rho * area / section.mass_per_length;
+    }
+    scale[s] = (std::max(0.0, rest[s] - covered) + mass) / rest[s];
+    s0 = s1;
+  }
+  rod->set_segment_mass_scale(scale);
 }
 
 // rotational_inertia_scale: auto gives the lifting scale of the rod as it is held
@@ -79,6 +124,8 @@ void build_rod_entry(const RodDescription& r, Scene* scene, std::vector<RodEntry
     scene->supports.push_back(support);
   }
   for (const LoadDescription& l : r.loads) build_load(l, rod, &scene->warnings);
+  build_density(r.density_ranges, r.spec.section, rod);
+  for (const MassDescription& m : r.masses) build_mass(m, rod);
   // After the supports: `auto` reads the stability limits of the rod as it is held.
   if (r.inertia_scale_auto)
     rod->set_rotational_inertia_scale(
@@ -106,6 +153,7 @@ Scene build_scene(const SceneDescription& d, AutomaticRequests* requests) {
   scene.name = d.name;
   scene.description = d.description;
   if (d.gravity) scene.world.gravity = *d.gravity;
+  scene.world.gravity_ramp = d.gravity_ramp;
   scene.world.integrator = d.integrator;
   if (d.time_step) scene.world.time_step = *d.time_step;
   scene.duration = d.duration;

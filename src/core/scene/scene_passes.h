@@ -64,6 +64,22 @@ struct LoadDescription {
   IndexRef at;       // the node (force) or segment (torque)
 };
 
+// A `masses` entry: a point mass at a node, with a rigid body's rotary inertia at an end node (a
+// plug), the node unresolved.
+struct MassDescription {
+  std::string path;  // "rods[0].masses[1]"
+  IndexRef at;
+  double mass = 0.0;                                 // kg
+  double inertia_across = 0.0, inertia_along = 0.0;  // kg m^2
+  std::optional<Value> inertia_key;                  // the first inertia key given
+};
+
+// A `density_ranges` entry: the density over [from, to] of rest arc length (m).
+struct DensityRange {
+  double from = 0.0, to = 0.0, rho = 0.0;
+  Value key{YAML::Node(), ""};
+};
+
 // A `boundary` entry (scene_boundary.cpp): its node or segment unresolved, its drive's keyframes
 // not yet placed at the rod's start.
 struct BoundaryDescription {
@@ -109,6 +125,8 @@ struct RodDescription {
   std::optional<InitialDescription> initial;
   std::vector<BoundaryDescription> boundary;
   std::vector<LoadDescription> loads;
+  std::vector<MassDescription> masses;
+  std::vector<DensityRange> density_ranges;
   // rotational_inertia_scale: a number, or auto (computed on the built rod, noted under its key).
   std::optional<double> inertia_scale;
   std::optional<std::string> inertia_scale_auto;  // the key's path
@@ -129,6 +147,7 @@ struct SceneDescription {
   std::string base;    // folder of relative paths (keyframe files, URDFs): the scene file's
   std::string name, description;
   std::optional<Vec3> gravity;  // m/s^2; none: the world's default
+  double gravity_ramp = 0.0;    // s
   Integrator integrator = kDefaultIntegrator;
   bool integrator_auto = false;
   double duration = 1.0;  // s

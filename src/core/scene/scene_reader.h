@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "corde_sim/model/drag.h"
 #include "corde_sim/model/element_energies.h"
 #include "corde_sim/rod/material.h"
 #include "corde_sim/rod/motion.h"
@@ -97,8 +98,20 @@ class Map {
   std::set<std::string> used_;
 };
 
-// The section of rods[i] from its `material` and `radius` keys (scene_material.cpp).
-Section read_section(Map* rod);
+// What a material file gives a rod besides its section: its drag and contact friction, which the
+// rod's own `drag` and `contact.friction` keys override.
+struct MaterialExtras {
+  std::string file;  // the material file read ("": none)
+  std::optional<Drag> drag;
+  std::optional<double> friction;
+};
+
+// The section of rods[i] from its `material` and `radius` keys (scene_material.cpp): a preset, a
+// map, or a material file (`{file: F}`, or a name not a preset: <base>/materials/NAME.yaml),
+// whose drag and friction go to *extras (may be null).
+Section read_section(Map* rod, const std::string& base, MaterialExtras* extras);
+// A rod's `drag` map, for its radius (scene.cpp).
+Drag read_drag(const Value& v, double radius);
 // The `shape` of a rod (scene_material.cpp).
 RodShape read_shape(const Value& v);
 

@@ -71,7 +71,7 @@ void write_energy_header(std::ostream& out) {
 void write_energy_rows(std::ostream& out, const World& world) {
   char buf[320];
   for (const Rod& rod : world.rods()) {
-    const Energies e = rod.energies(world.gravity);
+    const Energies e = rod.energies(world.gravity_at(world.time()));
     std::snprintf(buf, sizeof buf, "%.9g,", world.time());
     std::string row = buf + csv_field(rod.name());
     std::snprintf(buf, sizeof buf, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", e.kinetic_translation,

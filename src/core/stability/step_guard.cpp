@@ -193,7 +193,7 @@ GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const
     for (const Rod& rod : world.rods()) {
       double m = 0.0;
       for (double mi : rod.node_masses()) m += mi;
-      const Energies r = rod.energies(world.gravity);
+      const Energies r = rod.energies(world.gravity_at(world.time()));
       const double specific = (r.kinetic() + r.elastic()) / m;
       if (specific > worst) {
         worst = specific;
@@ -210,9 +210,18 @@ GuardProblem StepGuard::check(const World& world, WorldEnergies* energies) const
 void StepGuard::add_step_work(const World& world, double h) {
   double w = 0.0;
   const double t1 = world.time(), t0 = t1 - h;
+  // Gravity ramping in (World::gravity_ramp) changes its potential at fixed positions.
+  const bool ramp = world.gravity_ramp > 0.0 && t0 < world.gravity_ramp;
+  const Vec3 dg = ramp ? Vec3(world.gravity_at(t1) - world.gravity_at(t0)) : Vec3::Zero();
   for (const Rod& rod : world.rods()) {
     const auto& v = rod.velocities();
     const auto& q = rod.orientations();
+    if (ramp) {
+      double du = 0.0;
+      for (int i = 0; i < rod.num_nodes(); ++i)
+        du += rod.node_masses()[i] * dg.dot(rod.positions()[i]);
+      w += std::abs(du);
+    }
     const auto& om = rod.angular_velocities();
     for (const NodeDrive& d : rod.node_drives()) w += std::abs(d.reaction.dot(v[d.node])) * h;
     for (const SegmentDrive& d : rod.segment_drives())

@@ -237,6 +237,7 @@ SceneEquilibrium solve_scene_statics(Scene* scene, double t, const StaticOptions
   World& world = scene->world;
   for (Rod& rod : world.rods()) {
     hold_grasps(*scene, &rod, t);
+    // Like the loads that have started, gravity acts whole (its ramp only keeps a run calm).
     eq.rods.push_back(solve_rod(&rod, world.gravity, t, options, true));
     if (!eq.rods.back().result.converged && eq.ok) {
       eq.ok = false;
@@ -253,8 +254,9 @@ RodEquilibrium settle_rod(Scene* scene, Rod* rod) {
   if (!why.empty()) throw SceneError(why);
   const Rod given = *rod;
   hold_grasps(*scene, rod, 0.0);
-  // The loads as the run starts with them (a ramp from zero: none), so that it starts at rest.
-  RodEquilibrium e = solve_rod(rod, scene->world.gravity, 0.0, StaticOptions(), false);
+  // The loads and gravity as the run starts with them (a ramp from zero: none), so that it starts
+  // at rest.
+  RodEquilibrium e = solve_rod(rod, scene->world.gravity_at(0.0), 0.0, StaticOptions(), false);
   if (!e.result.converged) throw SceneError(not_converged(e, 0.0));
   // Keep the shape; the grasps' drives are the run's to add (as before), the rest as given.
   const std::vector<Vec3> x = rod->positions();

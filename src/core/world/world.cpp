@@ -83,8 +83,9 @@ void World::copy_to(World* out) const {
 
 WorldEnergies World::energies() const {
   WorldEnergies w;
+  const Vec3 g = gravity_at(time_);
   for (const Rod& r : rods_) {
-    const Energies e = r.energies(gravity);
+    const Energies e = r.energies(g);
     w.total.stretch += e.stretch;
     w.total.bend_twist += e.bend_twist;
     w.total.coupling += e.coupling;

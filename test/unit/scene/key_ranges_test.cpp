@@ -47,6 +47,12 @@ bool scene_override(const std::string& key, double v, std::string* text, std::st
              key == "fluid_density") {
     *text = "rods.0.drag={" + key + ": " + x + "}";
     *path = "rods[0].drag." + key;
+  } else if (key == "mass") {
+    *text = "rods.0.masses=[{node: end, mass: " + x + "}]";
+    *path = "rods[0].masses[0].mass";
+  } else if (key == "inertia_across" || key == "inertia_along") {
+    *text = "rods.0.masses=[{node: end, mass: 1, " + key + ": " + x + "}]";
+    *path = "rods[0].masses[0]." + key;
   } else if (key == "drag_coefficient" || key == "friction_coefficient") {
     *text = "rods.0.drag={fluid_density: 1, " + key + ": " + x + "}";
     *path = "rods[0].drag." + key;
