@@ -11,12 +11,15 @@
 // are backward Euler for the nodes and, to first order in theta, for the rotations (the
 // gyroscopic term w x I w is left out: for the thin sections of rods it is small and its effect
 // is bounded). Newton iterations on the increments (dx, dtheta) use the exact Hessian plus M/h^2
-// and I/h^2 (quadratic convergence), or its positive semi-definite variant for an iteration where
-// that sum is not positive definite, solved by the O(N) block Cholesky, with a backtracking line
-// search on Phi. The contact response uses the last iteration's factorisation while its answer z
-// to the impulses' loads b keeps z^T M z / h^2 <= 2 b . z (a definite matrix, A >= M/h^2, keeps
-// it within b . z), else the definite variant at the step's result: the exact matrix may be near
-// singular and answer an impulse with a huge motion. New velocities are (x - x^n)/h and theta/h.
+// and I/h^2 (quadratic convergence); for an iteration where that sum is not positive definite (a
+// compressed rod buckling where it lands), the same with its inertia terms scaled by 1 + tau, the
+// smallest tau of 1e-3 x 4^k (up to 1e3) that makes it definite, and failing that its positive
+// semi-definite variant (which converges only linearly); solved by the O(N) block Cholesky, with
+// a backtracking line search on Phi. The contact response uses the last iteration's
+// factorisation (unless shifted) while its answer z to the impulses' loads b keeps
+// z^T M z / h^2 <= 2 b . z (a definite matrix, A >= M/h^2, keeps it within b . z), else the
+// definite variant at the step's result: the exact matrix may be near singular and answer an
+// impulse with a huge motion. New velocities are (x - x^n)/h and theta/h.
 //
 // Dissipation, linear in the step's velocities with directions taken at the step's start (so it
 // is quadratic in the unknowns and never adds energy): internal friction along each chord's
@@ -215,6 +218,10 @@ class ImplicitEuler {
   // The state solver_ was factorised at, to decide whether it can be kept (reuse_factor).
   bool have_factor_ = false;
   bool factor_definite_ = false;  // solver_ holds the definite variant (the contact response's)
+  // The inertia terms of the assembled matrix are scaled by 1 + shift_ (0 but while Newton shifts
+  // an indefinite exact Hessian); factor_shifted_: the factorisation is such a shifted one.
+  double shift_ = 0.0;
+  bool factor_shifted_ = false;
   double factor_beta_ = 0.0;
   std::vector<Vec3> factor_x_;
   std::vector<Quat> factor_q_;

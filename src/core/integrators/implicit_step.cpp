@@ -208,7 +208,7 @@ void ImplicitEuler::project_gradient(Eigen::VectorXd* g) const {
 
 void ImplicitEuler::assemble(const Rod& rod, const RodSystem& sys, double h) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();
-  const double inv_h2 = 1.0 / (h * h), inv_h = 1.0 / h;
+  const double inv_h2 = (1.0 + shift_) / (h * h), inv_h = 1.0 / h;
   sys.hessian(&a_);
   for (int i = 0; i < nn; ++i)
     a_.diag[i].topLeftCorner<3, 3>().diagonal().array() += inv_h2 * rod.node_masses()[i];
@@ -345,7 +345,18 @@ class ImplicitEuler::Iterations final : public NewtonProblem {
     // this iteration.
     if (!kept_) {
       sys_.definite = false;
-      if (!e_.refactor(rod_, sys_, h_)) {
+      bool ok = e_.refactor(rod_, sys_, h_);
+      // Indefinite (a compressed rod buckling, typically where it lands): the exact Hessian with
+      // its inertia terms scaled up by 1 + tau, the smallest tau of a geometric series that makes
+      // it definite (starting below the last one that did), keeps the rest of its curvature; the
+      // definite variant drops the compressed terms' curvature everywhere and converges slowly.
+      for (double tau = std::max(kMinShift, 0.25 * shift_); !ok && tau <= kMaxShift; tau *= 4.0) {
+        e_.shift_ = tau;
+        ok = e_.refactor(rod_, sys_, h_);
+        if (ok) shift_ = tau;
+      }
+      e_.shift_ = 0.0;
+      if (!ok) {
         sys_.definite = true;
         if (!e_.refactor(rod_, sys_, h_)) {  // cannot fail with the definite variant
           e_.factored_ = false;
@@ -424,6 +435,8 @@ class ImplicitEuler::Iterations final : public NewtonProblem {
   bool last_kept_ = false;  // the last iteration ran on a kept factorisation
   bool kept_ = false;
   bool theta_stale_ = false;
+  double shift_ = 0.0;  // the last shift that made the exact Hessian definite in this step
+  static constexpr double kMinShift = 1e-3, kMaxShift = 1e3;
 };
 
 ImplicitResult ImplicitEuler::step(Rod& rod, double t, double h, const Vec3& gravity,
@@ -622,7 +635,8 @@ ImplicitResult ImplicitEuler::restep_first_order(Rod& rod, double t, double h,
 }
 
 bool ImplicitEuler::ensure_factor(const Rod& rod, bool exact_ok) {
-  if (factored_ && (factor_definite_ || exact_ok)) return true;
+  // A shifted factorisation (Iterations::direction) is not the step's linearisation.
+  if (factored_ && !factor_shifted_ && (factor_definite_ || exact_ok)) return true;
   // Converged without a Newton iteration: the kept factorisation if it still stands for the
   // matrix at the result, else one at the result.
   if (factor_definite_ && factor_reusable(rod)) return factored_ = true;
@@ -638,6 +652,7 @@ bool ImplicitEuler::refactor(const Rod& rod, const RodSystem& sys, double h) {
   ++factorisations_;
   have_factor_ = solver_.factor(a_);
   factor_definite_ = sys.definite;
+  factor_shifted_ = shift_ > 0.0;
   factor_beta_ = h;
   factor_x_ = rod.positions();
   factor_q_ = rod.orientations();
@@ -679,7 +694,8 @@ void ImplicitEuler::parameters(const Rod& rod, std::vector<double>* out) {
 
 bool ImplicitEuler::factor_reusable(const Rod& rod) {
   const double limit = opt_.reuse_factor;
-  if (!(limit > 0.0) || !have_factor_ || beta_ != factor_beta_ || kind_ != factor_kind_)
+  if (!(limit > 0.0) || !have_factor_ || factor_shifted_ || beta_ != factor_beta_ ||
+      kind_ != factor_kind_)
     return false;
   const auto& x = rod.positions();
   const auto& q = rod.orientations();
