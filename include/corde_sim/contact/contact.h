@@ -60,9 +60,10 @@ struct ContactSettings {
   // Implicit integrator: the contact solve. kRounds: the rounds above. kDelassus: an accelerated
   // projected gradient on the Delassus operator W = J C J^T (C the rods' compliance, applied by
   // their banded solves), preconditioned by each contact's exact block of W
-  // (contact_delassus.cpp); it stops on the same tolerance, after at most
-  // implicit_iterations. Rounds are used where the rods turn with the contacts (surface friction,
-  // rolling resistance) or the response gives no compliance blocks.
+  // (contact_delassus.cpp); it stops on the same tolerance, after at most implicit_iterations
+  // (short of the tolerance there, the rounds go on from its best impulses). Rounds are used where
+  // the rods turn with the contacts (surface friction, rolling resistance) or the response gives
+  // no compliance blocks.
   enum class Solver { kRounds, kDelassus };
   Solver implicit_solver = Solver::kRounds;
   int implicit_iterations = 100;

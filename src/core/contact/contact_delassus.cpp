@@ -267,6 +267,16 @@ bool ContactSystem::solve_delassus(World& world, double h, ContactResponse& resp
   stats_.delassus_iterations = iterations;
   stats_.residual = best;
   stats_.tolerance = tolerance;
+  // Short of the tolerance at the limit (a violent impact): the rounds go on from the best
+  // impulses, so that the step is never left less resolved than the rounds leave it.
+  if (best > tolerance && iterations > 0) {
+    for (size_t k = 0; k < nc; ++k) {
+      Contact& c = contacts_[k];
+      c.pn = best_[k].dot(c.normal);
+      c.pt = tangential(best_[k], c.normal);
+    }
+    return false;
+  }
   // The best impulses, and the rods' true response to them as their state (the warm start's is
   // already).
   if (iterations > 0) {
