@@ -1,11 +1,13 @@
 // corde_charts: the charts that compare the integrators (docs/charts/, plotted by
 // scripts/plot_charts.py): work-precision on three scenes, the stability map, the cost per step
-// against N, and the implicit method's numerical damping. Library only, no ROS. `--short` runs a
+// against N, the implicit method's numerical damping, and the implicit contact solves' cost
+// against the number of contacts. Library only, no ROS. `--short` runs a
 // few coarse points of each in seconds (the test command runs it); the full run takes minutes.
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "chart_contacts.h"
 #include "chart_stability.h"
 #include "chart_work_precision.h"
 
@@ -14,10 +16,11 @@ namespace charts {
 namespace {
 
 const char* kUsage =
-    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping|sag]\n"
+    "usage: corde_charts [--short] [--out DIR] [--only work,map,scaling,damping,contacts|sag]\n"
     "  --short    a few coarse points of every chart (seconds; the test runs it)\n"
     "  --only L   only these charts (default all); sag: only scene (a) of work\n"
-    "  --out DIR  folder for work_precision.csv, stability_map.csv, scaling.csv, damping.csv\n"
+    "  --out DIR  folder for work_precision.csv, stability_map.csv, scaling.csv, damping.csv,\n"
+    "             contact_solve.csv\n"
     "             (default docs/charts)\n";
 
 struct Plan {
@@ -27,6 +30,9 @@ struct Plan {
   std::vector<int> sag_scaled_n, cable_scaled_n;
   std::vector<double> explicit_fractions, sag_h, v8_h, cable_h, cable_h_bdf2, youngs, h_omega;
   std::vector<int> modes;
+  std::vector<int> contact_rod_n, contact_coil_n;
+  double contact_duration = 1.0;
+  int contact_repeats = 3;
   int damping_n = 40, cable_ref_n = 320, sag_repeats = 5;
   double sag_duration = 0.5, v8_periods = 5.0, cable_duration = 0.5, scale_cpu = 0.2;
   long map_steps_explicit = 1000, map_steps_implicit = 200;
@@ -53,6 +59,8 @@ Plan make_plan(bool full) {
     p.youngs = {1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 2e11};
     p.h_omega = {0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0};
     p.modes = {1, 3};
+    p.contact_rod_n = {10, 20, 40, 80, 160};
+    p.contact_coil_n = {25, 50, 100, 200};
   } else {
     p.sag_n = p.v8_n = p.cable_n = p.map_n = p.sag_scaled_n = p.cable_scaled_n = {10};
     p.scale_n = {10, 100};
@@ -71,6 +79,10 @@ Plan make_plan(bool full) {
     p.map_steps_explicit = 200;
     p.map_steps_implicit = 20;
     p.map_iterations = 3;
+    p.contact_rod_n = {10};
+    p.contact_coil_n = {};
+    p.contact_duration = 0.02;
+    p.contact_repeats = 1;
   }
   return p;
 }
@@ -214,6 +226,34 @@ bool scaling(const Plan& plan, const std::string& dir) {
   return true;
 }
 
+// Each scene, N and solve: the median CPU of contact_repeats runs (the other figures of that run).
+bool contact_solves(const Plan& plan, const std::string& dir) {
+  FILE* f = open_csv(dir, "contact_solve.csv",
+                     "scene,solver,elements,contacts,cpu_per_second,iterations_per_step,"
+                     "max_iterations,max_depth");
+  if (!f) return false;
+  for (int scene : {0, 1})
+    for (int n : scene == 0 ? plan.contact_rod_n : plan.contact_coil_n)
+      for (auto solver : {ContactSettings::Solver::kRounds, ContactSettings::Solver::kDelassus}) {
+        std::vector<ContactPoint> runs;
+        for (int k = 0; k < plan.contact_repeats; ++k)
+          runs.push_back(contact_chart_run(scene, n, solver, plan.contact_duration));
+        std::sort(runs.begin(), runs.end(), [](const ContactPoint& a, const ContactPoint& b) {
+          return a.cpu_per_second < b.cpu_per_second;
+        });
+        const ContactPoint& p = runs[runs.size() / 2];
+        const char* name = solver == ContactSettings::Solver::kDelassus ? "delassus" : "rounds";
+        const char* what = scene == 0 ? "steel_rod" : "rope_coil";
+        std::fprintf(f, "%s,%s,%d,%.2f,%.5f,%.3f,%d,%.5f\n", what, name, n, p.contacts,
+                     p.cpu_per_second, p.iterations, p.max_iterations, p.max_depth);
+        std::fflush(f);
+        std::fprintf(stderr, "contacts %-9s %-8s N=%-4d %.0f contacts: %.4f s/s, %.2f it/step\n",
+                     what, name, n, p.contacts, p.cpu_per_second, p.iterations);
+      }
+  std::fclose(f);
+  return true;
+}
+
 bool damping(const Plan& plan, const std::string& dir) {
   FILE* f = open_csv(dir, "damping.csv",
                      "method,mode,elements,h_omega,omega,h,steps,factor_per_step,theory_per_step,"
@@ -263,7 +303,7 @@ bool damping(const Plan& plan, const std::string& dir) {
 int main(int argc, char** argv) {
   using namespace corde::charts;
   bool full = true;
-  std::string dir = "docs/charts", only = "work,map,scaling,damping";
+  std::string dir = "docs/charts", only = "work,map,scaling,damping,contacts";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {
@@ -282,9 +322,9 @@ int main(int argc, char** argv) {
   }
   const Plan plan = make_plan(full);
   auto want = [&](const char* name) { return only.find(name) != std::string::npos; };
-  const bool ok = (!(want("work") || want("sag")) || work_precision(plan, dir, !want("work"))) &&
-                  (!want("map") || stability_map(plan, dir)) &&
-                  (!want("scaling") || scaling(plan, dir)) &&
-                  (!want("damping") || damping(plan, dir));
+  const bool ok =
+      (!(want("work") || want("sag")) || work_precision(plan, dir, !want("work"))) &&
+      (!want("map") || stability_map(plan, dir)) && (!want("scaling") || scaling(plan, dir)) &&
+      (!want("damping") || damping(plan, dir)) && (!want("contacts") || contact_solves(plan, dir));
   return ok ? 0 : 1;
 }

@@ -57,6 +57,16 @@ struct ContactSettings {
   double implicit_tolerance = 1e-3;
   double implicit_tolerance_min = 1e-4;
   double max_round_scale = 100.0;  // cap on a round's scaling of the impulses' change
+  // Implicit integrator: the contact solve. kRounds: the rounds above. kDelassus: an accelerated
+  // projected gradient on the Delassus operator W = J C J^T (C the rods' compliance, applied by
+  // their banded solves), preconditioned by each contact's exact block of W
+  // (contact_delassus.cpp); it stops on the same tolerance, after at most implicit_iterations
+  // (short of the tolerance there, the rounds go on from its best impulses). Rounds are used where
+  // the rods turn with the contacts (surface friction, rolling resistance) or the response gives
+  // no compliance blocks.
+  enum class Solver { kRounds, kDelassus };
+  Solver implicit_solver = Solver::kRounds;
+  int implicit_iterations = 100;
   // Friction acts at the contact point on the surfaces (true: its moment turns the segments, so a
   // rope rolls and a floor brakes its spin) or at the axes (false: no moment; a rope spinning on a
   // floor keeps its spin; rolling_friction brakes it). Off by default: the shipped scenes and
@@ -110,9 +120,15 @@ struct ContactStats {
   // The deepest deep contact's -gap over rod a's radius (0: no contact deeper than
   // ContactSettings::deep_penetration).
   double max_ratio = 0.0;
-  int candidate_pairs = 0;  // segment pairs the broad phase passed to the narrow phase
-  int iterations = 0;       // Gauss-Seidel sweeps done (they stop once converged)
-  int rounds = 0;           // implicit: rounds of sweeps and rod responses
+  int candidate_pairs = 0;      // segment pairs the broad phase passed to the narrow phase
+  int iterations = 0;           // Gauss-Seidel sweeps done (they stop once converged)
+  int rounds = 0;               // implicit: rounds of sweeps and rod responses
+  int delassus_iterations = 0;  // implicit, ContactSettings::Solver::kDelassus: iterations done
+  // Implicit: the contact solve's last measure of how far contacts close past their target (or,
+  // with kDelassus, carry impulse while separating or slide while sticking) over the step, in
+  // radii, and the tolerance it was held to.
+  double residual = 0.0;
+  double tolerance = 0.0;
 };
 
 // The contact stage of World::step: detection and the constraint solve. Holds the scratch and the
@@ -161,6 +177,14 @@ class ContactSystem {
   bool retake_closing(World& world, double h, ContactResponse& response);
   // Coupled response: rounds of sweeps and the rods' true response.
   void solve_rounds(World& world, double h, ContactResponse& response);
+  // Coupled response: accelerated projected gradient on the Delassus operator
+  // (contact_delassus.cpp); false (nothing changed) when the response gives no compliance blocks.
+  bool solve_delassus(World& world, double h, ContactResponse& response);
+  // Coupled response: the rods touched by contacts or by a prediction (touched_).
+  void mark_touched(const World& world, const ContactResponse& response);
+  // Coupled response: each touched rod's node impulses (impulse_) remembered as the next step's
+  // prediction, and its torque impulses with spin_.
+  void remember_impulses(int nr);
   bool pair_list_valid(const World& world) const;
   void build_pair_list(const World& world);
   void warm_start();
@@ -259,6 +283,18 @@ class ContactSystem {
   std::vector<Previous> previous_;
   std::vector<Previous> old_;      // implicit: the impulses before a round's sweeps
   std::vector<Previous> last_dp_;  // implicit: the last round's change per contact
+  // The Delassus solve's scratch (contact_delassus.cpp).
+  struct DelassusRow {
+    double wn = 0.0, wt = 0.0;  // the contact's normal and tangential compliance (W's block)
+    double target = 0.0;        // normal_target
+    double radius = 0.0;        // rod a's
+  };
+  std::vector<DelassusRow> rows_;
+  std::vector<std::vector<Mat3>> comp_diag_, comp_lower_;  // per rod: node compliance blocks
+  // Per contact: impulses (pn n + pt) at the iterate, the extrapolated point, the trial and the
+  // best; relative velocities at the iterate and the extrapolated point; the trial's change.
+  std::vector<Vec3> lam_, hat_, trial_, best_, u_lam_, u_hat_, du_;
+  double delassus_scale_ = 1.0;  // the last step's final step scale
 };
 
 // The rod segments with a contact deeper than `fraction` of the rod's radius in the world's last

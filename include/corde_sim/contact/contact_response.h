@@ -47,6 +47,13 @@ class ContactResponse {
   // The node velocity changes a change of the impulses makes, without changing the rod.
   virtual void response(const Rod& /*rod*/, int /*r*/, const std::vector<Vec3>& /*impulses*/,
                         std::vector<Vec3>* /*dv*/, const std::vector<Vec3>* /*torque_impulses*/) {}
+  // The node blocks of response()'s compliance (dv = C p, m/s per N s): diag[i] = C_ii and
+  // lower[i] = C_{i+1,i}, which give each contact's own block of the Delassus operator exactly.
+  // False when not available (the contact solve then uses the rounds).
+  virtual bool node_compliance(const Rod& /*rod*/, int /*r*/, std::vector<Mat3>* /*diag*/,
+                               std::vector<Mat3>* /*lower*/) {
+    return false;
+  }
 };
 
 }  // namespace corde

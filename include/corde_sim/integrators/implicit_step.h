@@ -133,6 +133,11 @@ class ImplicitEuler {
   // prediction out of the totals; a change carries none of it).
   void response(const Rod& rod, const std::vector<Vec3>& impulses, std::vector<Vec3>* dv,
                 const std::vector<Vec3>* torque_impulses = nullptr);
+  // The node blocks of the response's compliance, dv = C p (the operator response() applies,
+  // m/s per N s): diag[i] = C_ii, lower[i] = C_{i+1,i}, from the diagonal and first subdiagonal
+  // blocks of A^-1 by selected inversion of the factorisation the response uses (kept while that
+  // factorisation is). Held nodes' blocks are zero. False when no factorisation is usable.
+  bool node_compliance(const Rod& rod, std::vector<Mat3>* diag, std::vector<Mat3>* lower);
   // The last step's effective step b (s).
   double effective_step() const { return beta_; }
   bool has_prediction() const { return !predicted_.empty() || !predicted_torques_.empty(); }
@@ -229,6 +234,9 @@ class ImplicitEuler {
   std::vector<Mat3> factor_proj_;
   std::vector<double> factor_params_, params_;  // the rod's parameters then and now (scratch)
   long factorisations_ = 0;
+  // Selected inverse of the factorisation numbered inverse_of_ (node_compliance).
+  std::vector<Mat6> inv_diag_, inv_lower_;
+  long inverse_of_ = -1;
   bool chord_ok_ = true;  // Newton may iterate on a kept factorisation (off after one failed)
   Eigen::VectorXd g_, g_trial_, d_, z_, rhs_;
   Eigen::VectorXd g_raw_, g_raw_trial_;  // g_ and g_trial_ before the supports' projection

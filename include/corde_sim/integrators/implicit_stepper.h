@@ -57,6 +57,10 @@ class ImplicitStepper final : public Stepper {
                 const std::vector<Vec3>* torque_impulses) override {
     steps_[r].response(rod, impulses, dv, torque_impulses);
   }
+  bool node_compliance(const Rod& rod, int r, std::vector<Mat3>* diag,
+                       std::vector<Mat3>* lower) override {
+    return steps_[r].node_compliance(rod, diag, lower);
+  }
 
  private:
   bool second_order_ = false;

@@ -38,6 +38,11 @@ class BlockTridiagSolver {
   bool factor(const BlockTridiag& a, double min_pivot = 0.0);
   // Solves A x = b in place.
   void solve(Eigen::VectorXd* b) const;
+  // The blocks of A^-1 on the diagonal and the first subdiagonal (diag[k] = (k, k), lower[k] =
+  // (k + 1, k)) from the factorisation, by selected inversion (Takahashi's recurrences, from the
+  // last block up): O(n) where the whole inverse is dense. Allocates only when the number of blocks
+  // grows.
+  void selected_inverse(std::vector<Mat6>* diag, std::vector<Mat6>* lower) const;
 
  private:
   std::vector<Mat6> l_inv_t_;  // L_kk^-T, the transposed inverse of each pivot block's factor

@@ -111,7 +111,9 @@ void ContactSystem::solve(World& world, double h, ContactResponse& response) {
     sweep(world.contact, h, world.contact.iterations);
     finish(world, h, true);
   } else {
-    solve_rounds(world, h, response);
+    const bool delassus =
+        world.contact.implicit_solver == ContactSettings::Solver::kDelassus && !spin_;
+    if (!delassus || !solve_delassus(world, h, response)) solve_rounds(world, h, response);
     finish(world, h, false);
   }
 }
@@ -166,12 +168,7 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
   const size_t nc = contacts_.size();
   // A rod whose step included predicted impulses is answered even without contacts now (the
   // response then takes the prediction back out).
-  touched_.assign(nr, 0);
-  for (int r = 0; r < nr; ++r) touched_[r] = response.has_prediction(r) ? 1 : 0;
-  for (const Contact& c : contacts_) {
-    touched_[c.rod_a] = 1;
-    if (c.rod_b >= 0) touched_[c.rod_b] = 1;
-  }
+  mark_touched(world, response);
   impulse_.resize(nr);
   change_v_.resize(nr);
   torque_.resize(nr);
@@ -324,19 +321,7 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
         for (size_t i = 0; i < velocity_[r].size(); ++i)
           last_dv_[r][i] = velocity_[r][i] - held_v_[r][i];
   }
-  // Remembered per rod, as the next step's prediction.
-  last_impulse_.resize(nr);
-  last_torque_.resize(nr);
-  for (int r = 0; r < nr; ++r) {
-    if (touched_[r])
-      last_impulse_[r] = impulse_[r];
-    else
-      last_impulse_[r].clear();
-    if (touched_[r] && spin_)
-      last_torque_[r] = torque_[r];
-    else
-      last_torque_[r].clear();
-  }
+  remember_impulses(nr);  // as the next step's prediction
 }
 
 double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {

@@ -773,6 +773,33 @@ void ImplicitEuler::response(const Rod& rod, const std::vector<Vec3>& impulses,
   for (int i = 0; i < nn; ++i) (*dv)[i] = z_.segment<3>(6 * i) / h;
 }
 
+bool ImplicitEuler::node_compliance(const Rod& rod, std::vector<Mat3>* diag,
+                                    std::vector<Mat3>* lower) {
+  if (!ensure_factor(rod, true) || !have_factor_) return false;
+  if (inverse_of_ != factorisations_) {
+    solver_.selected_inverse(&inv_diag_, &inv_lower_);
+    inverse_of_ = factorisations_;
+  }
+  const int nn = rod.num_nodes();
+  const double s = 1.0 / (beta_ * beta_);
+  // The projection of each node's increments (held: none; constrained: proj_).
+  auto project = [&](int i, const Mat3& m, bool left) -> Mat3 {
+    const signed char k = kind_[2 * i];
+    if (k == 1) return Mat3::Zero();
+    if (k == 2) return left ? Mat3(proj_[2 * i] * m) : Mat3(m * proj_[2 * i]);
+    return m;
+  };
+  diag->resize(nn);
+  lower->resize(std::max(0, nn - 1));
+  for (int i = 0; i < nn; ++i) {
+    (*diag)[i] = project(i, project(i, s * inv_diag_[i].topLeftCorner<3, 3>(), true), false);
+    if (i + 1 < nn)
+      (*lower)[i] =
+          project(i + 1, project(i, s * inv_lower_[i].topLeftCorner<3, 3>(), false), true);
+  }
+  return true;
+}
+
 void ImplicitEuler::respond(Rod& rod, const std::vector<Vec3>& impulses,
                             const std::vector<Vec3>* torque_impulses) {
   const int nn = rod.num_nodes(), ns = rod.num_segments();

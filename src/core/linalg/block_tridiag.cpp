@@ -140,6 +140,25 @@ void BlockTridiagSolver::solve(Eigen::VectorXd* b) const {
   }
 }
 
+// With A = L L^T, Sigma = A^-1 satisfies Sigma L = L^-T, whose blocks below the diagonal are zero:
+// Sigma_{k+1,k} = -Sigma_{k+1,k+1} G_k and Sigma_kk = L_kk^-T L_kk^-1 + G_k^T Sigma_{k+1,k+1} G_k,
+// G_k = L_{k+1,k} L_kk^-1.
+void BlockTridiagSolver::selected_inverse(std::vector<Mat6>* diag, std::vector<Mat6>* lower) const {
+  const int n = blocks_;
+  diag->resize(n);
+  lower->resize(std::max(0, n - 1));
+  if (n == 0) return;
+  (*diag)[n - 1].noalias() = l_inv_t_[n - 1] * l_inv_t_[n - 1].transpose();
+  Mat6 g, sg;
+  for (int k = n - 2; k >= 0; --k) {
+    g.noalias() = l_lower_[k] * l_inv_t_[k].transpose();
+    sg.noalias() = (*diag)[k + 1] * g;
+    (*lower)[k] = -sg;
+    (*diag)[k].noalias() = l_inv_t_[k] * l_inv_t_[k].transpose();
+    (*diag)[k].noalias() += g.transpose() * sg;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // BlockTridiagLU: S_0 = A_00, S_{k+1} = A_{k+1,k+1} - A_{k+1,k} S_k^-1 A_{k,k+1}.
 

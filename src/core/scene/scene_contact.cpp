@@ -324,6 +324,11 @@ void read_contact_settings(const Value& v, ContactSettings* s) {
   Map m(v);
   if (auto p = m.find("iterations")) s->iterations = p->integer(1, 10000);
   if (auto p = m.find("implicit_sweeps")) s->implicit_sweeps = p->integer(1, 10000);
+  if (auto p = m.find("implicit_solver"))
+    s->implicit_solver = p->choice({"rounds", "delassus"}) == "delassus"
+                             ? ContactSettings::Solver::kDelassus
+                             : ContactSettings::Solver::kRounds;
+  if (auto p = m.find("implicit_iterations")) s->implicit_iterations = p->integer(1, 10000);
   if (auto p = m.find("friction")) s->friction = p->non_negative(SceneBounds::max_factor, "");
   if (auto p = m.find("skin")) s->skin = p->non_negative(SceneBounds::max_skin, "");
   if (auto p = m.find("push_out")) {

@@ -415,6 +415,29 @@ TEST(BlockTridiagSolver, MatchesADenseSolve) {
   }
 }
 
+// Takahashi's recurrences give the diagonal and first subdiagonal blocks of the dense inverse.
+TEST(BlockTridiagSolver, SelectedInverseMatchesTheDenseInverse) {
+  for (int n : {1, 2, 7, 40}) {
+    const BlockTridiag a = step_matrix(n);
+    BlockTridiagSolver solver;
+    ASSERT_TRUE(solver.factor(a)) << n;
+    std::vector<Mat6> diag, lower;
+    solver.selected_inverse(&diag, &lower);
+    const Eigen::MatrixXd inv = a.dense().inverse();
+    ASSERT_EQ(static_cast<int>(diag.size()), a.blocks());
+    ASSERT_EQ(static_cast<int>(lower.size()), a.blocks() - 1);
+    const double scale = inv.cwiseAbs().maxCoeff();
+    for (int k = 0; k < a.blocks(); ++k) {
+      EXPECT_LT((diag[k] - inv.block<6, 6>(6 * k, 6 * k)).cwiseAbs().maxCoeff(), 1e-10 * scale)
+          << n << " block " << k;
+      if (k + 1 < a.blocks())
+        EXPECT_LT((lower[k] - inv.block<6, 6>(6 * k + 6, 6 * k)).cwiseAbs().maxCoeff(),
+                  1e-10 * scale)
+            << n << " block " << k;
+    }
+  }
+}
+
 TEST(BlockTridiagSolver, RefusesAnIndefiniteMatrix) {
   BlockTridiag a = step_matrix(10);
   BlockTridiagSolver solver;

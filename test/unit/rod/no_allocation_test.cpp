@@ -15,6 +15,7 @@
 #include "corde_sim/rod/boundary.h"
 #include "corde_sim/rod/material.h"
 #include "corde_sim/rod/rod_shape.h"
+#include "corde_sim/scene/scene.h"
 #include "corde_sim/world/world.h"
 
 namespace {
@@ -297,6 +298,29 @@ TEST(NoAllocation, ImplicitStepAllocatesNothingAfterTheFirst) {
   }
   EXPECT_EQ(count, 0) << "heap allocations during 49 implicit steps";
   EXPECT_TRUE(rod.finite());
+}
+
+// The implicit contact solve on the Delassus operator (contact: {implicit_solver: delassus})
+// reuses its scratch: a rod landing on a slope and sliding, after its first steps.
+TEST(NoAllocation, DelassusContactSolveAllocatesNothingAfterWarmUp) {
+  Scene s = parse_scene(
+      "gravity: [0, 0, -9.81]\ntime_step: 0.002\nintegrator: implicit_euler\n"
+      "contact: {implicit_solver: delassus}\n"
+      "obstacles:\n  - {name: slope, type: plane, normal: [0.5, 0, 0.8660254], friction: 0.3}\n"
+      "rods:\n  - {name: rod, elements: 20, radius: 0.005, material: {E: 1.0e7, nu: 0.5, rho: "
+      "1000, damping_time: 1.0e-3}, shape: {type: straight, start: [0.003, 0, 0.0052], direction: "
+      "[0.8660254, 0, -0.5], length: 0.5}}\n");
+  s.world.step(100);
+  ASSERT_GT(s.world.contacts()->stats().active, 10);
+  long count = 0;
+  {
+    CountAllocations counter;
+    s.world.step(200);
+    count = counter.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations during 200 implicit steps with the Delassus solve";
+  EXPECT_GT(s.world.contacts()->stats().active, 10);
+  EXPECT_TRUE(s.world.finite());
 }
 
 }  // namespace
