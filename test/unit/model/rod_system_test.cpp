@@ -430,10 +430,11 @@ TEST(BlockTridiagSolver, SelectedInverseMatchesTheDenseInverse) {
     for (int k = 0; k < a.blocks(); ++k) {
       EXPECT_LT((diag[k] - inv.block<6, 6>(6 * k, 6 * k)).cwiseAbs().maxCoeff(), 1e-10 * scale)
           << n << " block " << k;
-      if (k + 1 < a.blocks())
+      if (k + 1 < a.blocks()) {
         EXPECT_LT((lower[k] - inv.block<6, 6>(6 * k + 6, 6 * k)).cwiseAbs().maxCoeff(),
                   1e-10 * scale)
             << n << " block " << k;
+      }
     }
   }
 }
