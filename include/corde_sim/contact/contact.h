@@ -103,6 +103,10 @@ struct Contact {
   // A deep contact (beyond deep_penetration): the largest change of the pair's relative normal
   // velocity its normal impulse may make alone (m/s); infinite for the others.
   double max_dv = std::numeric_limits<double>::infinity();
+  // With a moving obstacle: its surface keeps making overlap as it sweeps or turns, so a
+  // penetration is pushed out by a separating speed relative to it in the solve, not by
+  // ContactSystem::push_out.
+  bool moving = false;
 };
 
 // Statistics of the last step, for diagnostics and tests.

@@ -339,10 +339,14 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
   }
 }
 
-double ContactSystem::normal_target(const Contact& c, const ContactSettings&, double h) {
+double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {
   // d + h v_n >= 0 for a gap; a penetration must not deepen (push_out removes it, from the
-  // positions: a separating speed here would stay in the rod as momentum and throw it off).
-  return c.gap >= 0.0 ? -c.gap / h : 0.0;
+  // positions: a separating speed here would stay in the rod as momentum and throw it off). A
+  // contact with a moving obstacle (a link pressing into the cable, a pinch) is pushed out at a
+  // capped separating speed relative to its surface here instead (within max_dv where bounded).
+  if (c.gap >= 0.0) return -c.gap / h;
+  return c.moving || c.max_dv < kNoCap ? std::min(-cs.push_out * c.gap / h, cs.max_push_speed)
+                                       : 0.0;
 }
 
 void ContactSystem::push_out(World& world, double h) {
@@ -362,7 +366,7 @@ void ContactSystem::push_out(World& world, double h) {
   for (size_t k = 0; k < nc; ++k) {
     const Contact& c = contacts_[k];
     push_target_[k] = 0.0;
-    if (!(scratch_w_[k] > 0.0)) continue;
+    if (!(scratch_w_[k] > 0.0) || c.moving || c.max_dv < kNoCap) continue;  // in solve()
     Vec3 vr = point(c.rod_a, c.seg_a, c.s_a, velocities);
     vr -= c.rod_b >= 0 ? point(c.rod_b, c.seg_b, c.s_b, velocities) : c.surface_velocity;
     const double depth = -(c.gap + h * vr.dot(c.normal));
@@ -386,8 +390,18 @@ void ContactSystem::push_out(World& world, double h) {
       const Contact& c = contacts_[k];
       Vec3 moved = point(c.rod_a, c.seg_a, c.s_a, shifts);
       if (c.rod_b >= 0) moved -= point(c.rod_b, c.seg_b, c.s_b, shifts);
-      const double p =
+      double p =
           std::max(0.0, push_[k] + (push_target_[k] - moved.dot(c.normal)) * scratch_inv_w_[k]);
+      // No node moves by more than max_push_speed h for one contact (next to a held node the
+      // point moves by s times its free node's shift; two surfaces pinching a rod ask for
+      // opposite shifts).
+      const auto& wn = inv_mass_[c.rod_a];
+      double node_w = std::max((1.0 - c.s_a) * wn[c.seg_a], c.s_a * wn[c.seg_a + 1]);
+      if (c.rod_b >= 0) {
+        const auto& wm = inv_mass_[c.rod_b];
+        node_w = std::max({node_w, (1.0 - c.s_b) * wm[c.seg_b], c.s_b * wm[c.seg_b + 1]});
+      }
+      if (node_w > 0.0) p = std::min(p, cs.max_push_speed * h / node_w);
       const Vec3 dp = (p - push_[k]) * c.normal;
       push_[k] = p;
       const auto& wa = inv_mass_[c.rod_a];
@@ -710,6 +724,7 @@ void ContactSystem::detect(World& world, double h, const ContactResponse& respon
           c.mu = ob.friction;
           c.surface_velocity = ob.velocity_at(f.on_obstacle);
           c.surface_spin = ob.angular_velocity;
+          c.moving = ob.moving;
           c.roll = cs.rolling_friction * radius;
           contacts_.push_back(c);
         }
