@@ -40,8 +40,12 @@ struct ContactSettings {
   int iterations = 30;          // Gauss-Seidel sweeps per step
   double friction = 0.4;        // default rod-rod Coulomb coefficient
   double skin = 0.05;           // extra detection distance, a fraction of the rod radius
-  double push_out = 0.2;        // fraction of a penetration removed per step (Baumgarte)
-  double max_push_speed = 0.5;  // m/s, cap on the separating speed that removes penetration
+  double push_out = 0.2;        // fraction of a penetration moved out per step (push_out())
+  double max_push_speed = 0.5;  // m/s, cap on the speed at which push_out() moves it
+  // s: and no faster than with this time constant (a fraction h / push_out_time a step), so that a
+  // stiff rod whose overlap can only go by stretching it is not stretched within a few short steps
+  // and sprung loose; 0: no such bound.
+  double push_out_time = 0.01;
   // Implicit integrator: rounds of sweeps, each followed by the rods' true (stiffness-coupled)
   // response to the impulses (ContactSystem::solve with a coupled response).
   int implicit_rounds = 30;  // at most
@@ -109,6 +113,10 @@ struct Contact {
   // A deep contact (beyond deep_penetration): the largest change of the pair's relative normal
   // velocity its normal impulse may make alone (m/s); infinite for the others.
   double max_dv = std::numeric_limits<double>::infinity();
+  // With a moving obstacle: its surface keeps making overlap as it sweeps or turns, so a
+  // penetration is pushed out by a separating speed relative to it in the solve, not by
+  // ContactSystem::push_out.
+  bool moving = false;
 };
 
 // Statistics of the last step, for diagnostics and tests.
@@ -150,6 +158,14 @@ class ContactSystem {
   // approach from below), each followed by every touched rod's true response to the impulses so
   // far (ContactResponse::respond), which leaves the rods at their final state.
   void solve(World& world, double h, ContactResponse& response);
+  // After the rods' step (World::step's last stage): the contacts that penetrate at the step's
+  // end (their gap at the start plus h times the final relative normal velocity) are pushed out
+  // along their normals by ContactSettings::push_out of their depth, at most max_push_speed h,
+  // by moving node positions alone (Gauss-Seidel over those contacts with the nodes' lumped
+  // masses; a held node does not move, a node on a line or plane moves along it). The velocity
+  // constraints of solve() only keep a penetration from deepening; removing it is this
+  // correction's, which adds no momentum (a split of the push-out from the impulses).
+  void push_out(World& world, double h);
 
   const std::vector<Contact>& contacts() const { return contacts_; }
   // Coupled response (implicit methods): the node impulses rod r received in the last step (null
@@ -217,7 +233,10 @@ class ContactSystem {
   std::vector<double> scratch_w_;      // per contact: the pair's inverse mass
   std::vector<double> scratch_inv_w_;  // and its inverse (0 where the pair cannot move)
   std::vector<double> cap_;            // per contact: the largest normal impulse (max_dv)
-  bool any_cap_ = false;               // some contact has a max_dv (else cap_ is not used)
+  // push_out(): per contact its target and displacement impulse, per rod the nodes' shifts.
+  std::vector<double> push_target_, push_;
+  std::vector<std::vector<Vec3>> shift_;
+  bool any_cap_ = false;  // some contact has a max_dv (else cap_ is not used)
   // Surface friction. A lever: one segment turned by a contact's friction, dw = c J (n x dp) and
   // the point's velocity gains c w x n (c = -share times the lever, J the world inverse inertia).
   struct Lever {

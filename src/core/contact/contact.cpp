@@ -325,8 +325,94 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
 }
 
 double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {
-  // d + h v_n >= 0 for a gap; a penetration is pushed out at a capped speed.
-  return c.gap >= 0.0 ? -c.gap / h : std::min(-cs.push_out * c.gap / h, cs.max_push_speed);
+  // d + h v_n >= 0 for a gap; a penetration must not deepen (push_out removes it, from the
+  // positions: a separating speed here would stay in the rod as momentum and throw it off). A
+  // contact with a moving obstacle (a link pressing into the cable, a pinch) is pushed out at a
+  // capped separating speed relative to its surface here instead (within max_dv where bounded).
+  if (c.gap >= 0.0) return -c.gap / h;
+  return c.moving || c.max_dv < kNoCap ? std::min(-cs.push_out * c.gap / h, cs.max_push_speed)
+                                       : 0.0;
+}
+
+void ContactSystem::push_out(World& world, double h) {
+  const ContactSettings& cs = world.contact;
+  auto& rods = world.rods();
+  const size_t nc = contacts_.size();
+  const int nr = static_cast<int>(rods.size());
+  auto point = [&](int r, int seg, double s, auto&& of) {
+    return Vec3((1.0 - s) * of(r)[seg] + s * of(r)[seg + 1]);
+  };
+  auto velocities = [&](int r) -> const std::vector<Vec3>& { return rods[r].velocities(); };
+  // Each contact's depth at the step's end (linearised from its gap at the start), the part of it
+  // to remove now.
+  push_target_.resize(nc);
+  push_.assign(nc, 0.0);
+  bool any = false;
+  for (size_t k = 0; k < nc; ++k) {
+    const Contact& c = contacts_[k];
+    push_target_[k] = 0.0;
+    if (!(scratch_w_[k] > 0.0) || c.moving || c.max_dv < kNoCap) continue;  // in solve()
+    Vec3 vr = point(c.rod_a, c.seg_a, c.s_a, velocities);
+    vr -= c.rod_b >= 0 ? point(c.rod_b, c.seg_b, c.s_b, velocities) : c.surface_velocity;
+    const double depth = -(c.gap + h * vr.dot(c.normal));
+    if (!(depth > 0.0)) continue;
+    const double fraction =
+        cs.push_out_time > 0.0 ? std::min(cs.push_out, h / cs.push_out_time) : cs.push_out;
+    push_target_[k] = std::min(fraction * depth, cs.max_push_speed * h);
+    any = true;
+  }
+  if (!any) return;
+  shift_.resize(nr);
+  for (int r = 0; r < nr; ++r) shift_[r].assign(rods[r].num_nodes(), Vec3::Zero());
+  auto shifts = [&](int r) -> const std::vector<Vec3>& { return shift_[r]; };
+  // Gauss-Seidel over the penetrating contacts: normal displacement impulses >= 0, each node
+  // moving by its inverse mass times its share, until no impulse changes by more than a millionth
+  // of the largest.
+  for (int it = 0; it < cs.iterations; ++it) {
+    double change = 0.0, largest = 0.0;
+    for (size_t k = 0; k < nc; ++k) {
+      if (!(push_target_[k] > 0.0)) continue;
+      const Contact& c = contacts_[k];
+      Vec3 moved = point(c.rod_a, c.seg_a, c.s_a, shifts);
+      if (c.rod_b >= 0) moved -= point(c.rod_b, c.seg_b, c.s_b, shifts);
+      double p =
+          std::max(0.0, push_[k] + (push_target_[k] - moved.dot(c.normal)) * scratch_inv_w_[k]);
+      // No node moves by more than max_push_speed h for one contact (next to a held node the
+      // point moves by s times its free node's shift; two surfaces pinching a rod ask for
+      // opposite shifts).
+      const auto& wn = inv_mass_[c.rod_a];
+      double node_w = std::max((1.0 - c.s_a) * wn[c.seg_a], c.s_a * wn[c.seg_a + 1]);
+      if (c.rod_b >= 0) {
+        const auto& wm = inv_mass_[c.rod_b];
+        node_w = std::max({node_w, (1.0 - c.s_b) * wm[c.seg_b], c.s_b * wm[c.seg_b + 1]});
+      }
+      if (node_w > 0.0) p = std::min(p, cs.max_push_speed * h / node_w);
+      const Vec3 dp = (p - push_[k]) * c.normal;
+      push_[k] = p;
+      const auto& wa = inv_mass_[c.rod_a];
+      shift_[c.rod_a][c.seg_a] += ((1.0 - c.s_a) * wa[c.seg_a]) * dp;
+      shift_[c.rod_a][c.seg_a + 1] += (c.s_a * wa[c.seg_a + 1]) * dp;
+      if (c.rod_b >= 0) {
+        const auto& wb = inv_mass_[c.rod_b];
+        shift_[c.rod_b][c.seg_b] -= ((1.0 - c.s_b) * wb[c.seg_b]) * dp;
+        shift_[c.rod_b][c.seg_b + 1] -= (c.s_b * wb[c.seg_b + 1]) * dp;
+      }
+      change = std::max(change, dp.norm());
+      largest = std::max(largest, p);
+    }
+    if (change <= 1e-6 * largest) break;
+  }
+  // Held nodes have no inverse mass; a node on a line or plane moves along it only.
+  for (int r = 0; r < nr; ++r) {
+    Rod& rod = rods[r];
+    for (const NodeConstraint& nc2 : rod.node_constraints()) {
+      Vec3& d = shift_[r][nc2.node];
+      d = nc2.kind == NodeConstraint::Kind::kLine ? Vec3(nc2.direction * nc2.direction.dot(d))
+                                                  : tangential(d, nc2.direction);
+    }
+    auto& x = rod.positions();
+    for (int i = 0; i < rod.num_nodes(); ++i) x[i] += shift_[r][i];
+  }
 }
 
 void ContactSystem::prepare_sweeps(const World& world) {
@@ -623,6 +709,7 @@ void ContactSystem::detect(World& world, double h, const ContactResponse& respon
           c.mu = ob.friction;
           c.surface_velocity = ob.velocity_at(f.on_obstacle);
           c.surface_spin = ob.angular_velocity;
+          c.moving = ob.moving;
           c.roll = cs.rolling_friction * radius;
           contacts_.push_back(c);
         }

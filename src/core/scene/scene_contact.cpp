@@ -337,6 +337,8 @@ void read_contact_settings(const Value& v, ContactSettings* s) {
   }
   if (auto p = m.find("max_push_speed"))
     s->max_push_speed = p->non_negative(SceneBounds::max_speed, "m/s");
+  if (auto p = m.find("push_out_time"))
+    s->push_out_time = p->non_negative(SceneBounds::max_time, "s");
   if (auto p = m.find("deep_penetration"))
     s->deep_penetration = p->positive(SceneBounds::max_factor, "");
   if (auto p = m.find("surface_friction")) s->surface_friction = p->boolean();

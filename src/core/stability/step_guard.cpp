@@ -260,8 +260,8 @@ void StepGuard::add_step_work(const World& world, double h) {
     }
   }
   // Contacts: a moving obstacle's surface works on the rod (its rolling resistance too, if it
-  // turns), and the push-out that removes a penetration separates the surfaces faster than they
-  // met.
+  // turns), and the push-out that removes a penetration moves the rod against the contact force
+  // by at most that speed times h (ContactSystem::push_out).
   if (const ContactSystem* c = world.contacts()) {
     const ContactSettings& cs = world.contact;
     for (const Contact& k : c->contacts()) {

@@ -37,6 +37,8 @@ void World::step() {
   if (contacts) own_contacts().solve(*this, time_step, stepper);
   // 4. Commit: integration with the contact forces, drives, constraints, reactions, statistics.
   stepper.commit(*this, contacts);
+  // 5. Push-out (contact/contact.cpp): what penetration is left is moved out of the positions.
+  if (contacts) contacts_->push_out(*this, time_step);
   time_ += time_step;
 }
 
