@@ -82,6 +82,23 @@ class Bag(unittest.TestCase):
             run = subprocess.run([F.find_corde_run(), out, "--quiet"], capture_output=True,
                                  text=True)
             self.assertEqual(run.returncode, 0, run.stderr)
+            # and a scene naming the material file (as the node loads it) runs the same cable
+            by_name = dict(fitted)
+            by_name["rods"] = [dict(fitted["rods"][0], material="my_cable")]
+            by_name["rods"][0].pop("drag", None)  # the file carries the drag
+            named = os.path.join(tmp, "by_name.yaml")
+            with open(named, "w") as f:
+                yaml.safe_dump(by_name, f)
+            runs = []
+            for scene_file in (out, named):
+                csv = scene_file + ".csv"
+                r = subprocess.run([F.find_corde_run(), scene_file, "--quiet", "--duration",
+                                    "0.5", "--out", csv], capture_output=True, text=True)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with open(csv) as f:
+                    runs.append(f.read())
+            self.assertGreater(len(runs[0].splitlines()), 10)
+            self.assertEqual(runs[1], runs[0])
 
 
 class JointStates(unittest.TestCase):
