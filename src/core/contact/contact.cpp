@@ -354,7 +354,10 @@ void ContactSystem::push_out(World& world, double h) {
     if (!(scratch_w_[k] > 0.0) || c.moving || c.max_dv < kNoCap) continue;  // in solve()
     Vec3 vr = point(c.rod_a, c.seg_a, c.s_a, velocities);
     vr -= c.rod_b >= 0 ? point(c.rod_b, c.seg_b, c.s_b, velocities) : c.surface_velocity;
-    const double depth = -(c.gap + h * vr.dot(c.normal));
+    // A resting contact's overlap below a thousandth of the radius stays: moving it every step
+    // would keep a still rope from settling (and the implicit step from skipping Newton).
+    const double slop = 1e-3 * rods[c.rod_a].section().radius;
+    const double depth = -(c.gap + h * vr.dot(c.normal)) - slop;
     if (!(depth > 0.0)) continue;
     const double fraction =
         cs.push_out_time > 0.0 ? std::min(cs.push_out, h / cs.push_out_time) : cs.push_out;
