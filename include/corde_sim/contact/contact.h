@@ -224,6 +224,9 @@ class ContactSystem {
   void sweep(const ContactSettings& cs, double h, int iterations);
   void finish(World& world, double h, bool add_forces);
   static double normal_target(const Contact& c, const ContactSettings& cs, double h);
+  // A coupled solve's stopping tolerance in radii: 1 % of the touched rods' largest motion over
+  // the step (their current velocities), within the settings' bounds.
+  double coupled_tolerance(const World& world, double h) const;
 
   std::vector<Contact> contacts_;
   ContactStats stats_;

@@ -228,15 +228,8 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
     }
     return worst;
   };
-  // The step's largest motion in radii (with the warm-started impulses), for the tolerance.
-  double motion = 0.0;
-  for (int r = 0; r < nr; ++r)
-    if (touched_[r])
-      for (const Vec3& v : velocity_[r])
-        motion = std::max(motion, h * v.norm() / rods[r].section().radius);
-  const double tolerance =
-      std::clamp(0.01 * motion, std::min(cs.implicit_tolerance_min, cs.implicit_tolerance),
-                 cs.implicit_tolerance);
+  // With the warm-started impulses.
+  const double tolerance = coupled_tolerance(world, h);
   for (int round = 0; round < cs.implicit_rounds && nc > 0; ++round) {
     if (round > 0 && violation() <= tolerance) break;
     ++stats_.rounds;
@@ -322,6 +315,18 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
           last_dv_[r][i] = velocity_[r][i] - held_v_[r][i];
   }
   remember_impulses(nr);  // as the next step's prediction
+}
+
+double ContactSystem::coupled_tolerance(const World& world, double h) const {
+  const auto& rods = world.rods();
+  const ContactSettings& cs = world.contact;
+  double motion = 0.0;
+  for (size_t r = 0; r < rods.size(); ++r)
+    if (touched_[r])
+      for (const Vec3& v : velocity_[r])
+        motion = std::max(motion, h * v.norm() / rods[r].section().radius);
+  return std::clamp(0.01 * motion, std::min(cs.implicit_tolerance_min, cs.implicit_tolerance),
+                    cs.implicit_tolerance);
 }
 
 double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs, double h) {

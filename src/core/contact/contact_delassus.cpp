@@ -113,15 +113,7 @@ bool ContactSystem::solve_delassus(World& world, double h, ContactResponse& resp
   }
   u_lam_.resize(nc);
   for (size_t k = 0; k < nc; ++k) u_lam_[k] = relative(velocity_, k, true);
-  // The tolerance as the rounds': 1 % of the step's largest motion in radii, within bounds.
-  double motion = 0.0;
-  for (int r = 0; r < nr; ++r)
-    if (touched_[r])
-      for (const Vec3& v : velocity_[r])
-        motion = std::max(motion, h * v.norm() / rods[r].section().radius);
-  const double tolerance =
-      std::clamp(0.01 * motion, std::min(cs.implicit_tolerance_min, cs.implicit_tolerance),
-                 cs.implicit_tolerance);
+  const double tolerance = coupled_tolerance(world, h);  // as the rounds'
   // How far impulses p with relative velocities u leave the contact conditions over the step, in
   // radii: a contact closing past its target, one carrying impulse while it separates, one
   // sticking while it slips, one sliding other than against its friction. Contacts that cannot
