@@ -17,15 +17,20 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+// The library's "unknown preset" message, the name in it cut short if huge.
+std::string unknown_preset_message(const std::invalid_argument& e, const std::string& name) {
+  std::string msg = e.what();
+  const size_t at = msg.find("'" + name + "'");
+  if (at != std::string::npos) msg.replace(at, name.size() + 2, echo(name));
+  return msg;
+}
+
 const MaterialPreset& material_preset_of(const Value& v) {
   const std::string name = v.string();
   try {
     return material_preset(name);
   } catch (const std::invalid_argument& e) {
-    std::string msg = e.what();  // names the preset: cut a huge one short
-    const size_t at = msg.find("'" + name + "'");
-    if (at != std::string::npos) msg.replace(at, name.size() + 2, echo(name));
-    v.fail(msg);
+    v.fail(unknown_preset_message(e, name));
   }
 }
 
@@ -177,9 +182,7 @@ const MaterialPreset* find_preset_or_file(const Value& v, const std::string& bas
       *file = read_material_file(v, path);
       return nullptr;
     }
-    std::string msg = e.what();  // names the preset: cut a huge one short
-    const size_t at = msg.find("'" + name + "'");
-    if (at != std::string::npos) msg.replace(at, name.size() + 2, echo(name));
+    std::string msg = unknown_preset_message(e, name);
     if (plain_name(name)) msg += "; no material file " + quoted_path(path) + " either";
     v.fail(msg);
   }
