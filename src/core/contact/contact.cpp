@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "contact_velocity.h"
 #include "corde_sim/contact/contact_response.h"
 #include "corde_sim/contact/segment_distance.h"
 #include "corde_sim/math/so3.h"
@@ -138,10 +139,7 @@ bool ContactSystem::retake_closing(World& world, double h, ContactResponse& resp
   for (size_t k = 0; any && k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
     if (!response.may_retake(c.rod_a) && !(c.rod_b >= 0 && response.may_retake(c.rod_b))) continue;
-    Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
-    vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
-                              c.s_b * velocity_[c.rod_b][c.seg_b + 1])
-                       : c.surface_velocity;
+    const Vec3 vr = relative_velocity(c, velocity_, true);
     if (vr.dot(c.normal) >= normal_target(c, world.contact, h)) continue;
     for (int r : {c.rod_a, c.rod_b}) {
       if (r < 0 || !response.may_retake(r)) continue;
@@ -218,11 +216,7 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
   auto violation = [&] {
     double worst = 0.0;
     for (const Contact& c : contacts_) {
-      Vec3 vr =
-          (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
-      vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
-                                c.s_b * velocity_[c.rod_b][c.seg_b + 1])
-                         : c.surface_velocity;
+      const Vec3 vr = relative_velocity(c, velocity_, true);
       const double closing = normal_target(c, cs, h) - vr.dot(c.normal);
       worst = std::max(worst, h * closing / rods[c.rod_a].section().radius);
     }
@@ -261,23 +255,13 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
     for (int r = 0; r < nr; ++r)
       if (touched_[r])
         response.response(rods[r], r, impulse_[r], &change_v_[r], spin_ ? &torque_[r] : nullptr);
-    auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
-      return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
-    };
     const bool use_last = round > 0;
     double num = 0.0, den = 0.0, num2 = 0.0, den2 = 0.0, cross = 0.0;
     for (const Contact& c : contacts_) {
       if (c.pn <= 0.0) continue;
-      Vec3 vr = point(held_v_, c.rod_a, c.seg_a, c.s_a),
-           dv = point(change_v_, c.rod_a, c.seg_a, c.s_a);
-      Vec3 dl = use_last ? point(last_dv_, c.rod_a, c.seg_a, c.s_a) : Vec3::Zero();
-      if (c.rod_b >= 0) {
-        vr -= point(held_v_, c.rod_b, c.seg_b, c.s_b);
-        dv -= point(change_v_, c.rod_b, c.seg_b, c.s_b);
-        if (use_last) dl -= point(last_dv_, c.rod_b, c.seg_b, c.s_b);
-      } else {
-        vr -= c.surface_velocity;
-      }
+      const Vec3 vr = relative_velocity(c, held_v_, true);
+      const Vec3 dv = relative_velocity(c, change_v_, false);
+      const Vec3 dl = use_last ? relative_velocity(c, last_dv_, false) : Vec3::Zero();
       const double res = vr.dot(c.normal) - normal_target(c, cs, h), dres = dv.dot(c.normal);
       const double dres2 = dl.dot(c.normal);
       num += res * dres;
