@@ -551,50 +551,68 @@ void ContactSystem::apply_impulse(size_t k, const Vec3& p) {
 }
 
 void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
-  auto point_velocity = [&](int rod, int seg, double s) {
-    return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
-  };
   const std::vector<double>& wsum = scratch_w_;
   const std::vector<double>& inv_w = scratch_inv_w_;  // multiplications instead of divisions
   const bool capped = any_cap_;
+  const bool levers = !levers_.empty();  // some contact turns segments (surface friction)
+  const size_t nc = contacts_.size();
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
-  // warm started, settle in a few sweeps), or the iteration limit.
+  // warm started, settle in a few sweeps), or the iteration limit. The contact's nodes are read
+  // and written in place (apply_impulse's arithmetic, inlined: this loop is the solve's hot one).
   for (int it = 0; it < iterations; ++it) {
     double change2 = 0.0, largest = 0.0;  // the largest change squared
     ++stats_.iterations;
-    for (size_t k = 0; k < contacts_.size(); ++k) {
+    for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
       const double w = wsum[k];
       if (!(w > 0.0)) continue;
       const double iw = inv_w[k];
+      Vec3* va = velocity_[c.rod_a].data() + c.seg_a;
+      const double* ma = inv_mass_[c.rod_a].data() + c.seg_a;
+      Vec3* vb = c.rod_b >= 0 ? velocity_[c.rod_b].data() + c.seg_b : nullptr;
       // Relative to the other surface: a rod's, or a (moving) obstacle's; at the surfaces' common
       // point with surface friction (the segments' rotation adds a tangential part).
-      const ContactLevers& cl = contact_levers_[k];
-      Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
-      vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
-      if (cl.count > 0) vr += lever_velocity(k);
+      const bool turns = levers && contact_levers_[k].count > 0;
+      Vec3 vr = (1.0 - c.s_a) * va[0] + c.s_a * va[1];
+      if (vb)
+        vr -= (1.0 - c.s_b) * vb[0] + c.s_b * vb[1];
+      else
+        vr -= c.surface_velocity;
+      if (turns) vr += lever_velocity(k);
       const double target = normal_target(c, cs, h);
-      const double vn = vr.dot(c.normal);
+      const Vec3& n = c.normal;
+      const double vn = vr.dot(n);
       double pn = std::max(0.0, c.pn + (target - vn) * iw);
       if (capped) pn = std::min(pn, cap_[k]);
-      Vec3 dp = (pn - c.pn) * c.normal;
+      Vec3 dp = (pn - c.pn) * n;
       c.pn = pn;
       // Friction: the impulse that stops the sliding, projected onto the Coulomb disc. Without
       // levers an impulse P changes the relative velocity by w P (a scalar inverse mass); with
       // them the tangential block is 2x2, solved exactly (the normal impulse turns nothing).
       const Vec3 after = vr + w * dp;
-      const Vec3 vt = tangential(after, c.normal);
+      const Vec3 vt = after - n * n.dot(after);
       Vec3 pt;
-      if (cl.count == 0) {
+      if (!turns) {
         pt = c.pt - vt * iw;
       } else {
+        const ContactLevers& cl = contact_levers_[k];
         const Eigen::Vector2d d = cl.inv_k * Eigen::Vector2d(cl.t1.dot(vt), cl.t2.dot(vt));
         pt = c.pt - d.x() * cl.t1 - d.y() * cl.t2;
       }
       pt = within(pt, c.mu * c.pn);
       dp += pt - c.pt;
       c.pt = pt;
-      apply_impulse(k, dp);
+      if (!turns) {
+        va[0] += ((1.0 - c.s_a) * ma[0]) * dp;
+        va[1] += (c.s_a * ma[1]) * dp;
+        if (vb) {
+          const double* mb = inv_mass_[c.rod_b].data() + c.seg_b;
+          vb[0] -= ((1.0 - c.s_b) * mb[0]) * dp;
+          vb[1] -= (c.s_b * mb[1]) * dp;
+        }
+      } else {
+        apply_impulse(k, dp);
+      }
       if (c.roll > 0.0) sweep_roll(k);
       change2 = std::max(change2, dp.squaredNorm());
       largest = std::max(largest, c.pn);
