@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "contact_velocity.h"
 #include "corde_sim/contact/contact_response.h"
 #include "corde_sim/contact/segment_distance.h"
 #include "corde_sim/math/so3.h"
@@ -138,10 +139,7 @@ bool ContactSystem::retake_closing(World& world, double h, ContactResponse& resp
   for (size_t k = 0; any && k < contacts_.size(); ++k) {
     const Contact& c = contacts_[k];
     if (!response.may_retake(c.rod_a) && !(c.rod_b >= 0 && response.may_retake(c.rod_b))) continue;
-    Vec3 vr = (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
-    vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
-                              c.s_b * velocity_[c.rod_b][c.seg_b + 1])
-                       : c.surface_velocity;
+    const Vec3 vr = relative_velocity(c, velocity_, true);
     if (vr.dot(c.normal) >= normal_target(c, world.contact, h)) continue;
     for (int r : {c.rod_a, c.rod_b}) {
       if (r < 0 || !response.may_retake(r)) continue;
@@ -218,11 +216,7 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
   auto violation = [&] {
     double worst = 0.0;
     for (const Contact& c : contacts_) {
-      Vec3 vr =
-          (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1];
-      vr -= c.rod_b >= 0 ? Vec3((1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] +
-                                c.s_b * velocity_[c.rod_b][c.seg_b + 1])
-                         : c.surface_velocity;
+      const Vec3 vr = relative_velocity(c, velocity_, true);
       const double closing = normal_target(c, cs, h) - vr.dot(c.normal);
       worst = std::max(worst, h * closing / rods[c.rod_a].section().radius);
     }
@@ -261,23 +255,13 @@ void ContactSystem::solve_rounds(World& world, double h, ContactResponse& respon
     for (int r = 0; r < nr; ++r)
       if (touched_[r])
         response.response(rods[r], r, impulse_[r], &change_v_[r], spin_ ? &torque_[r] : nullptr);
-    auto point = [&](const std::vector<std::vector<Vec3>>& vel, int rod, int seg, double s) {
-      return Vec3((1.0 - s) * vel[rod][seg] + s * vel[rod][seg + 1]);
-    };
     const bool use_last = round > 0;
     double num = 0.0, den = 0.0, num2 = 0.0, den2 = 0.0, cross = 0.0;
     for (const Contact& c : contacts_) {
       if (c.pn <= 0.0) continue;
-      Vec3 vr = point(held_v_, c.rod_a, c.seg_a, c.s_a),
-           dv = point(change_v_, c.rod_a, c.seg_a, c.s_a);
-      Vec3 dl = use_last ? point(last_dv_, c.rod_a, c.seg_a, c.s_a) : Vec3::Zero();
-      if (c.rod_b >= 0) {
-        vr -= point(held_v_, c.rod_b, c.seg_b, c.s_b);
-        dv -= point(change_v_, c.rod_b, c.seg_b, c.s_b);
-        if (use_last) dl -= point(last_dv_, c.rod_b, c.seg_b, c.s_b);
-      } else {
-        vr -= c.surface_velocity;
-      }
+      const Vec3 vr = relative_velocity(c, held_v_, true);
+      const Vec3 dv = relative_velocity(c, change_v_, false);
+      const Vec3 dl = use_last ? relative_velocity(c, last_dv_, false) : Vec3::Zero();
       const double res = vr.dot(c.normal) - normal_target(c, cs, h), dres = dv.dot(c.normal);
       const double dres2 = dl.dot(c.normal);
       num += res * dres;
@@ -567,50 +551,68 @@ void ContactSystem::apply_impulse(size_t k, const Vec3& p) {
 }
 
 void ContactSystem::sweep(const ContactSettings& cs, double h, int iterations) {
-  auto point_velocity = [&](int rod, int seg, double s) {
-    return (1.0 - s) * velocity_[rod][seg] + s * velocity_[rod][seg + 1];
-  };
   const std::vector<double>& wsum = scratch_w_;
   const std::vector<double>& inv_w = scratch_inv_w_;  // multiplications instead of divisions
   const bool capped = any_cap_;
+  const bool levers = !levers_.empty();  // some contact turns segments (surface friction)
+  const size_t nc = contacts_.size();
   // Sweeps until no impulse changes by more than a millionth of the largest (resting contacts,
-  // warm started, settle in a few sweeps), or the iteration limit.
+  // warm started, settle in a few sweeps), or the iteration limit. The contact's nodes are read
+  // and written in place (apply_impulse's arithmetic, inlined: this loop is the solve's hot one).
   for (int it = 0; it < iterations; ++it) {
     double change2 = 0.0, largest = 0.0;  // the largest change squared
     ++stats_.iterations;
-    for (size_t k = 0; k < contacts_.size(); ++k) {
+    for (size_t k = 0; k < nc; ++k) {
       Contact& c = contacts_[k];
       const double w = wsum[k];
       if (!(w > 0.0)) continue;
       const double iw = inv_w[k];
+      Vec3* va = velocity_[c.rod_a].data() + c.seg_a;
+      const double* ma = inv_mass_[c.rod_a].data() + c.seg_a;
+      Vec3* vb = c.rod_b >= 0 ? velocity_[c.rod_b].data() + c.seg_b : nullptr;
       // Relative to the other surface: a rod's, or a (moving) obstacle's; at the surfaces' common
       // point with surface friction (the segments' rotation adds a tangential part).
-      const ContactLevers& cl = contact_levers_[k];
-      Vec3 vr = point_velocity(c.rod_a, c.seg_a, c.s_a);
-      vr -= c.rod_b >= 0 ? point_velocity(c.rod_b, c.seg_b, c.s_b) : c.surface_velocity;
-      if (cl.count > 0) vr += lever_velocity(k);
+      const bool turns = levers && contact_levers_[k].count > 0;
+      Vec3 vr = (1.0 - c.s_a) * va[0] + c.s_a * va[1];
+      if (vb)
+        vr -= (1.0 - c.s_b) * vb[0] + c.s_b * vb[1];
+      else
+        vr -= c.surface_velocity;
+      if (turns) vr += lever_velocity(k);
       const double target = normal_target(c, cs, h);
-      const double vn = vr.dot(c.normal);
+      const Vec3& n = c.normal;
+      const double vn = vr.dot(n);
       double pn = std::max(0.0, c.pn + (target - vn) * iw);
       if (capped) pn = std::min(pn, cap_[k]);
-      Vec3 dp = (pn - c.pn) * c.normal;
+      Vec3 dp = (pn - c.pn) * n;
       c.pn = pn;
       // Friction: the impulse that stops the sliding, projected onto the Coulomb disc. Without
       // levers an impulse P changes the relative velocity by w P (a scalar inverse mass); with
       // them the tangential block is 2x2, solved exactly (the normal impulse turns nothing).
       const Vec3 after = vr + w * dp;
-      const Vec3 vt = tangential(after, c.normal);
+      const Vec3 vt = after - n * n.dot(after);
       Vec3 pt;
-      if (cl.count == 0) {
+      if (!turns) {
         pt = c.pt - vt * iw;
       } else {
+        const ContactLevers& cl = contact_levers_[k];
         const Eigen::Vector2d d = cl.inv_k * Eigen::Vector2d(cl.t1.dot(vt), cl.t2.dot(vt));
         pt = c.pt - d.x() * cl.t1 - d.y() * cl.t2;
       }
       pt = within(pt, c.mu * c.pn);
       dp += pt - c.pt;
       c.pt = pt;
-      apply_impulse(k, dp);
+      if (!turns) {
+        va[0] += ((1.0 - c.s_a) * ma[0]) * dp;
+        va[1] += (c.s_a * ma[1]) * dp;
+        if (vb) {
+          const double* mb = inv_mass_[c.rod_b].data() + c.seg_b;
+          vb[0] -= ((1.0 - c.s_b) * mb[0]) * dp;
+          vb[1] -= (c.s_b * mb[1]) * dp;
+        }
+      } else {
+        apply_impulse(k, dp);
+      }
       if (c.roll > 0.0) sweep_roll(k);
       change2 = std::max(change2, dp.squaredNorm());
       largest = std::max(largest, c.pn);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "contact_velocity.h"
 #include "corde_sim/contact/contact.h"
 #include "corde_sim/contact/contact_response.h"
 #include "corde_sim/world/world.h"
@@ -94,13 +95,7 @@ bool ContactSystem::solve_delassus(World& world, double h, ContactResponse& resp
   };
   // Contact k's relative velocity from per-rod node velocities (absolute: less the obstacle's).
   auto relative = [&](const std::vector<std::vector<Vec3>>& vel, size_t k, bool absolute) {
-    const Contact& c = contacts_[k];
-    Vec3 v = (1.0 - c.s_a) * vel[c.rod_a][c.seg_a] + c.s_a * vel[c.rod_a][c.seg_a + 1];
-    if (c.rod_b >= 0)
-      v -= (1.0 - c.s_b) * vel[c.rod_b][c.seg_b] + c.s_b * vel[c.rod_b][c.seg_b + 1];
-    else if (absolute)
-      v -= c.surface_velocity;
-    return v;
+    return relative_velocity(contacts_[k], vel, absolute);
   };
   // The warm-started impulses and the rods' true response to them.
   lam_.resize(nc);
