@@ -19,12 +19,14 @@ struct Overlap {
   double obstacle = 0.0;  // deepest: radius minus the axis' distance to an obstacle (m, >= 0)
   double rods = 0.0;      // deepest: sum of radii minus the distance of two rods' axes
   double self = 0.0;      // the same for a rod's own segments farther apart than the contact
-                          // stage's neighbours (1 + ceil(0.8 pi r / l) segments)
+                          // stage's neighbours (1 + ceil(0.8 pi r / l) segments; with
+                          // `documented_window` from that many segments apart on, as
+                          // docs/scene_format.md words it)
   double worst() const { return std::max({obstacle, rods, self}); }
 };
 
 // All pairs, brute force: O(segments^2); sample it every few steps in long runs.
-inline Overlap measure_overlap(const World& world) {
+inline Overlap measure_overlap(const World& world, bool documented_window = false) {
   Overlap out;
   const std::vector<Rod>& rods = world.rods();
   std::vector<SegmentContact> found;
@@ -51,7 +53,8 @@ inline Overlap measure_overlap(const World& world) {
           const double l = rods[a].rest_lengths()[i];
           skip = 1 + static_cast<int>(std::ceil(0.8 * M_PI * ra / l));
         }
-        for (int j = a == b ? i + skip + 1 : 0; j + 1 < rods[b].num_nodes(); ++j) {
+        const int first = documented_window ? i + skip : i + skip + 1;
+        for (int j = a == b ? first : 0; j + 1 < rods[b].num_nodes(); ++j) {
           const SegmentPair p = closest_points(xa[i], xa[i + 1], xb[j], xb[j + 1]);
           const Vec3 d = (xa[i] + p.s * (xa[i + 1] - xa[i])) - (xb[j] + p.t * (xb[j + 1] - xb[j]));
           const double depth = ra + rb - d.norm();
@@ -83,6 +86,31 @@ inline WatchedRun run_watched(World* w, double duration, int every) {
       out.geometric.obstacle = std::max(out.geometric.obstacle, o.obstacle);
       out.geometric.rods = std::max(out.geometric.rods, o.rods);
       out.geometric.self = std::max(out.geometric.self, o.self);
+    }
+  }
+  return out;
+}
+
+// The deepest overlap from the geometry after every step, with the documented self-contact window,
+// and when it occurred.
+struct EveryStep {
+  Overlap deepest;
+  double worst = 0.0;       // the largest of deepest's three
+  double worst_time = 0.0;  // s, the time after the step that left it
+};
+
+inline EveryStep run_checked_every_step(World* w, double duration) {
+  EveryStep out;
+  const int steps = static_cast<int>(duration / w->time_step + 0.5);
+  for (int k = 1; k <= steps; ++k) {
+    w->step();
+    const Overlap o = measure_overlap(*w, true);
+    out.deepest.obstacle = std::max(out.deepest.obstacle, o.obstacle);
+    out.deepest.rods = std::max(out.deepest.rods, o.rods);
+    out.deepest.self = std::max(out.deepest.self, o.self);
+    if (o.worst() > out.worst) {
+      out.worst = o.worst();
+      out.worst_time = w->time();
     }
   }
   return out;

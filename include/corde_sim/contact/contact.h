@@ -61,6 +61,13 @@ struct ContactSettings {
   double implicit_tolerance = 1e-3;
   double implicit_tolerance_min = 1e-4;
   double max_round_scale = 100.0;  // cap on a round's scaling of the impulses' change
+  // Implicit integrator: the rounds hold each contact's gap linearised at the step's start (its
+  // closest points and normal fixed); where two rods' surfaces, at the positions the solve left,
+  // are closer than that allows by more than this fraction of the radius (segments sliding over
+  // each other, turning within the step), the contact is linearised again there and the rounds
+  // go on, up to implicit_passes times a step.
+  double implicit_geometric_tolerance = 2e-3;
+  int implicit_passes = 8;
   // Implicit integrator: the contact solve. kRounds: the rounds above. kDelassus: an accelerated
   // projected gradient on the Delassus operator W = J C J^T (C the rods' compliance, applied by
   // their banded solves), preconditioned by each contact's exact block of W
@@ -100,6 +107,9 @@ struct Contact {
   Vec3 point = Vec3::Zero();             // on b's surface (world), for display
   Vec3 surface_velocity = Vec3::Zero();  // an obstacle's: the velocity of its surface at `point`
   double gap = 0.0;                      // distance between the surfaces (negative: penetration)
+  // Implicit, linearised again at the solve's positions (ContactSystem::relinearise): how much the
+  // gap at the step's end falls short of gap + h v_n there (m; normal_target opens it by this).
+  double offset = 0.0;
   // Distances from the axes to the contact point along -normal (a) and +normal (b): the levers of
   // friction (0 without surface friction). For two rods they split the axes' distance in the
   // ratio of the radii, so both sides act at one point and angular momentum is kept.
@@ -191,6 +201,15 @@ class ContactSystem {
   // Coupled response: retakes the steps of rods meeting a contact their step would close (true:
   // some rod was stepped again).
   bool retake_closing(World& world, double h, ContactResponse& response);
+  // Coupled response: contacts between rods whose surfaces, at the positions the solve left, are
+  // closer than their linearisation allows are linearised there (closest points, normal, offset);
+  // true: some contact was.
+  bool relinearise(World& world, double h);
+  // Coupled response: true where the solve sped a node up beyond what detection allowed for (its
+  // skin over the step); detection is then run again with the solved velocities, the impulses
+  // found so far kept as the warm start.
+  bool outran_detection(const World& world, double h) const;
+  void redetect(World& world, double h, const ContactResponse& response);
   // Coupled response: rounds of sweeps and the rods' true response.
   void solve_rounds(World& world, double h, ContactResponse& response);
   // Coupled response: accelerated projected gradient on the Delassus operator
@@ -265,6 +284,7 @@ class ContactSystem {
   std::vector<std::vector<Vec3>> omega_, torque_;  // per rod and segment (world)
   // Per rod, during detect only: its start positions and velocities (the response's).
   std::vector<const std::vector<Vec3>*> start_x_, start_v_;
+  std::vector<std::vector<Vec3>> detected_v_;  // implicit: the velocities detection used
   std::vector<std::vector<Vec3>> held_v_, impulse_, change_v_;  // coupled: per rod
   std::vector<std::vector<Vec3>>
       last_dv_;  // implicit: the true response to the last round's change

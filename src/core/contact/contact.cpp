@@ -106,6 +106,7 @@ void ContactSystem::solve(World& world, double h, ContactResponse& response) {
     take_free_motion(world, h, response);
     detect(world, h, response);
   }
+  if (!response.lumped()) detected_v_ = velocity_;
   warm_start();
   prepare_sweeps(world);
   if (response.lumped()) {
@@ -115,6 +116,19 @@ void ContactSystem::solve(World& world, double h, ContactResponse& response) {
     const bool delassus =
         world.contact.implicit_solver == ContactSettings::Solver::kDelassus && !spin_;
     if (!delassus || !solve_delassus(world, h, response)) solve_rounds(world, h, response);
+    // Between rods only (obstacles' contacts are not linearised again).
+    bool pairs = false;
+    for (const Rod& rod : world.rods())
+      pairs = pairs || rod.contact_options().self || rod.contact_options().rods;
+    for (int pass = 0; pairs && pass < world.contact.implicit_passes; ++pass) {
+      // Detection again only adds pairs (the reach grows); a pass only where it did.
+      const size_t detected = contacts_.size();
+      if (outran_detection(world, h)) redetect(world, h, response);
+      const bool relin = relinearise(world, h);
+      if (!relin && contacts_.size() == detected) break;
+      prepare_sweeps(world);
+      solve_rounds(world, h, response);
+    }
     finish(world, h, false);
   }
 }
@@ -148,6 +162,81 @@ bool ContactSystem::retake_closing(World& world, double h, ContactResponse& resp
     }
   }
   return retaken;
+}
+
+// The rounds hold d + h v_n linearised at the step's start; at the positions they leave, segments
+// that slid over each other or turned can be closer than that (by up to a fifth of the radius at
+// 1 m/s and 2 ms). Such a contact is linearised again at those positions (a Newton step on the
+// distance): its closest points and normal there, and the offset that makes gap + h v_n - offset
+// the distance there, so that the same targets now hold the true distance.
+bool ContactSystem::relinearise(World& world, double h) {
+  const auto& rods = world.rods();
+  const double tolerance = world.contact.implicit_geometric_tolerance;
+  bool any = false;
+  for (Contact& c : contacts_) {
+    if (c.rod_b < 0) continue;
+    const auto& xa = rods[c.rod_a].positions();
+    const auto& xb = rods[c.rod_b].positions();
+    const auto& ya = *start_x_[c.rod_a];
+    const auto& yb = *start_x_[c.rod_b];
+    // The distance the pair keeps (the radii, or a neighbour's fold distance), as detected.
+    const double keep = ((1.0 - c.s_a) * ya[c.seg_a] + c.s_a * ya[c.seg_a + 1] -
+                         (1.0 - c.s_b) * yb[c.seg_b] - c.s_b * yb[c.seg_b + 1])
+                            .norm() -
+                        c.gap;
+    const SegmentPair sp =
+        closest_points(xa[c.seg_a], xa[c.seg_a + 1], xb[c.seg_b], xb[c.seg_b + 1]);
+    const Vec3 d = (xa[c.seg_a] + sp.s * (xa[c.seg_a + 1] - xa[c.seg_a])) -
+                   (xb[c.seg_b] + sp.t * (xb[c.seg_b + 1] - xb[c.seg_b]));
+    const double dist = d.norm(), end_gap = dist - keep;
+    if (!(end_gap < std::min(c.gap, 0.0) - tolerance * rods[c.rod_a].section().radius)) continue;
+    if (!(d.dot(c.normal) > 0.0)) continue;  // the axes crossed: the start's normal stays
+    c.s_a = sp.s;
+    c.s_b = sp.t;
+    c.normal = d / dist;
+    const Vec3 vr =
+        (1.0 - c.s_a) * velocity_[c.rod_a][c.seg_a] + c.s_a * velocity_[c.rod_a][c.seg_a + 1] -
+        (1.0 - c.s_b) * velocity_[c.rod_b][c.seg_b] - c.s_b * velocity_[c.rod_b][c.seg_b + 1];
+    c.offset = c.gap + h * vr.dot(c.normal) - end_gap;
+    c.pt = within(tangential(c.pt, c.normal), c.mu * c.pn);
+    any = true;
+  }
+  return any;
+}
+
+bool ContactSystem::outran_detection(const World& world, double h) const {
+  const auto& rods = world.rods();
+  const double skin = world.contact.skin;
+  for (size_t r = 0; r < rods.size(); ++r) {
+    if (!touched_[r]) continue;
+    const double slack = skin * rods[r].section().radius / h;
+    const auto& v0 = *start_v_[r];
+    for (size_t i = 0; i < velocity_[r].size(); ++i)
+      if (velocity_[r][i].norm() > std::max(detected_v_[r][i].norm(), v0[i].norm()) + slack)
+        return true;
+  }
+  return false;
+}
+
+void ContactSystem::redetect(World& world, double h, const ContactResponse&) {
+  previous_.clear();
+  for (const Contact& c : contacts_)
+    if (c.pn > 0.0) previous_.push_back({pair_key(c), c.pn, c.pt, c.pr});
+  std::sort(previous_.begin(), previous_.end(),
+            [](const Previous& a, const Previous& b) { return a.key < b.key; });
+  // Each node's reach from the larger of the speeds detection used and the solved ones.
+  for (size_t r = 0; r < velocity_.size(); ++r)
+    for (size_t i = 0; i < velocity_[r].size() && i < detected_v_[r].size(); ++i)
+      if (detected_v_[r][i].norm() > velocity_[r][i].norm()) velocity_[r][i] = detected_v_[r][i];
+  // Rod pairs only: the obstacles' contacts (and the bounds of those with moving obstacles, taken
+  // from the velocities detection used) stay as they are.
+  contacts_.erase(std::remove_if(contacts_.begin(), contacts_.end(),
+                                 [](const Contact& c) { return c.rod_b >= 0; }),
+                  contacts_.end());
+  detect_rod_pairs(world, h);
+  stats_.contacts = static_cast<int>(contacts_.size());
+  detected_v_ = velocity_;
+  warm_start();
 }
 
 void ContactSystem::solve_rounds(World& world, double h, ContactResponse& response) {
@@ -318,9 +407,10 @@ double ContactSystem::normal_target(const Contact& c, const ContactSettings& cs,
   // positions: a separating speed here would stay in the rod as momentum and throw it off). A
   // contact with a moving obstacle (a link pressing into the cable, a pinch) is pushed out at a
   // capped separating speed relative to its surface here instead (within max_dv where bounded).
-  if (c.gap >= 0.0) return -c.gap / h;
+  // A contact linearised again within the step (relinearise) opens by its offset besides.
+  if (c.gap >= 0.0) return (c.offset - c.gap) / h;
   return c.moving || c.max_dv < kNoCap ? std::min(-cs.push_out * c.gap / h, cs.max_push_speed)
-                                       : 0.0;
+                                       : c.offset / h;
 }
 
 void ContactSystem::push_out(World& world, double h) {
@@ -339,15 +429,20 @@ void ContactSystem::push_out(World& world, double h) {
   bool any = false;
   for (size_t k = 0; k < nc; ++k) {
     const Contact& c = contacts_[k];
-    push_target_[k] = 0.0;
+    push_target_[k] = -kNoCap;                                              // no bound
     if (!(scratch_w_[k] > 0.0) || c.moving || c.max_dv < kNoCap) continue;  // in solve()
     Vec3 vr = point(c.rod_a, c.seg_a, c.s_a, velocities);
     vr -= c.rod_b >= 0 ? point(c.rod_b, c.seg_b, c.s_b, velocities) : c.surface_velocity;
     // A resting contact's overlap below a thousandth of the radius stays: moving it every step
     // would keep a still rope from settling (and the implicit step from skipping Newton).
     const double slop = 1e-3 * rods[c.rod_a].section().radius;
-    const double depth = -(c.gap + h * vr.dot(c.normal)) - slop;
-    if (!(depth > 0.0)) continue;
+    const double end_gap = c.gap - c.offset + h * vr.dot(c.normal);
+    const double depth = -end_gap - slop;
+    // The others hold: no shift closes them past zero (or deepens a resting overlap).
+    if (!(depth > 0.0)) {
+      push_target_[k] = -std::max(end_gap, 0.0);
+      continue;
+    }
     const double fraction =
         cs.push_out_time > 0.0 ? std::min(cs.push_out, h / cs.push_out_time) : cs.push_out;
     push_target_[k] = std::min(fraction * depth, cs.max_push_speed * h);
@@ -363,7 +458,7 @@ void ContactSystem::push_out(World& world, double h) {
   for (int it = 0; it < cs.iterations; ++it) {
     double change = 0.0, largest = 0.0;
     for (size_t k = 0; k < nc; ++k) {
-      if (!(push_target_[k] > 0.0)) continue;
+      if (push_target_[k] == -kNoCap) continue;
       const Contact& c = contacts_[k];
       Vec3 moved = point(c.rod_a, c.seg_a, c.s_a, shifts);
       if (c.rod_b >= 0) moved -= point(c.rod_b, c.seg_b, c.s_b, shifts);

@@ -7,6 +7,7 @@
 
 #include "corde_sim/scene/scene.h"
 #include "corde_sim/world/world.h"
+#include "overlap_util.h"
 
 namespace corde {
 namespace {
@@ -44,6 +45,31 @@ TEST(ImplicitLanding, LimpRopeDroppedAtTwoMillisecondsConvergesEveryStep) {
   }
   EXPECT_EQ(unconverged, 0) << "steps whose Newton solve did not converge";
   EXPECT_LT(most, w.implicit.max_iterations);
+}
+
+// The same landing, its overlaps from the geometry after every step: into the floor below 1 % of
+// r (a self contact's push-out pressed a node 2 % of r into it), through itself at most a third
+// of a radius (the strands whipping across segment ends, about a radius a step, left 0.26 r).
+TEST(ImplicitLanding, LandingKeepsTheFloorAndBoundsSelfOverlapEveryStep) {
+  Scene s = parse_scene(kDroppedRope);
+  World& w = s.world;
+  const double r = w.rods()[0].section().radius;
+  const auto res = testing_overlap::run_checked_every_step(&w, 2.0);
+  ASSERT_TRUE(w.finite());
+  EXPECT_LT(res.deepest.obstacle, 0.01 * r) << "into the floor, worst at t = " << res.worst_time;
+  EXPECT_LT(res.deepest.self, 0.2 * r) << "through itself, worst at t = " << res.worst_time;
+}
+
+// The target: below 1 % of r through itself too. Not met yet (docs/model.md, "What the implicit
+// contact solve guarantees"): 0.13 r at 14 of 1000 steps, where 8 passes do not settle which
+// segment pair carries a contact that slides across a segment end within the step.
+TEST(ImplicitLanding, DISABLED_LandingKeepsSelfOverlapBelowOnePercentEveryStep) {
+  Scene s = parse_scene(kDroppedRope);
+  World& w = s.world;
+  const double r = w.rods()[0].section().radius;
+  const auto res = testing_overlap::run_checked_every_step(&w, 2.0);
+  ASSERT_TRUE(w.finite());
+  EXPECT_LT(res.deepest.self, 0.01 * r) << "through itself, worst at t = " << res.worst_time;
 }
 
 }  // namespace
