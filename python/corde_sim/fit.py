@@ -28,6 +28,8 @@ from .fit_recording import (FitError, Recording, ToolChain, grasp_segment,  # no
                             gripper_keyframes,
                             read_bag_recording, read_csv_recording, read_recording,
                             write_bag_recording, write_csv_recording, write_keyframe_csv)
+from .fit_wrench import (FORCE_NOISE, TORQUE_NOISE, WrenchSpec, frame_errors,  # noqa: F401
+                         simulate_with_wrench, synthesize_wrenches, wrench_spec)
 from .fit_sim import (Job, find_corde_run, get_key, load_scene_yaml, markers,  # noqa: F401
                       node_arc_lengths, project_arc_lengths, refine_arc_lengths, rod_length,
                       set_key, simulate,
@@ -42,7 +44,8 @@ __all__ = [
     "write_bag_recording", "gripper_keyframes", "grasp_segment", "write_keyframe_csv",
     "load_scene_yaml", "yaml_load", "get_key", "set_key", "find_corde_run", "SerialExecutor",
     "DaskExecutor", "make_executor", "report_text", "write_residuals_csv", "write_fitted_scene",
-    "material_file_data", "write_material_file",
+    "material_file_data", "write_material_file", "WrenchSpec", "wrench_spec",
+    "synthesize_wrenches", "simulate_with_wrench", "FORCE_NOISE", "TORQUE_NOISE",
 ]
 
 # ---------------------------------------------------------------------------------------------
@@ -152,6 +155,16 @@ class FitResult:
     arc_lengths: np.ndarray
     message: str = ""
     overrides: Dict[str, object] = field(default_factory=dict)
+    # With measured wrenches (fit_wrench): their times, the RMS force (N) and torque (N m, or
+    # None) error per wrench frame, and the RMS force error per component over all frames.
+    wrench_times: Optional[np.ndarray] = None
+    frame_force: Optional[np.ndarray] = None
+    frame_torque: Optional[np.ndarray] = None
+    force_rms: float = float("nan")
+    torque_rms: float = float("nan")
+    tracking_noise: float = 1e-3
+    force_noise: float = float("nan")
+    torque_noise: float = float("nan")
 
 
 def _marker_job(args):
@@ -160,18 +173,25 @@ def _marker_job(args):
     return markers(nodes, node_arc_lengths(nodes[0]), s)
 
 
+def _marker_wrench_job(args):
+    job, s, spec = args
+    nodes, w = simulate_with_wrench(job, spec)
+    return markers(nodes, node_arc_lengths(nodes[0]), s), w
+
+
 class Problem:
     """The residual function of a fit: log-parameters -> (simulated - tracked) / scale."""
 
     def __init__(self, scene, rec: Recording, params: List[Parameter], rod: str,
                  overrides: Dict[str, object], backend="auto", corde_run=None, executor=None,
-                 scale=1e-3, diff_step=1e-3, statics=False):
+                 scale=1e-3, diff_step=1e-3, statics=False, wrench: WrenchSpec = None):
         self.scene, self.rec, self.params, self.rod = scene, rec, params, rod
         self.statics = statics
         self.fixed = dict(overrides)
         self.backend, self.corde_run = backend, corde_run
         self.executor = executor or SerialExecutor()
         self.scale, self.h = scale, diff_step
+        self.wrench = wrench  # measured wrenches: residuals / their noise after the points'
         self.runs = 0
         self.s = rec.arc_lengths
         self._cache = {}
@@ -184,12 +204,20 @@ class Problem:
                    statics=self.statics)
 
     def _residuals_of(self, pts):
+        if self.wrench is not None:
+            pts, w = pts
+            return np.concatenate([((pts - self.rec.points) / self.scale).reshape(-1),
+                                   ((w - self.wrench.values) / self.wrench.scale()).reshape(-1)])
         return ((pts - self.rec.points) / self.scale).reshape(-1)
 
     def residuals_many(self, thetas):
         todo = [t for t in thetas if tuple(t) not in self._cache]
         if todo:
-            results = self.executor.map(_marker_job, [(self.job(t), self.s) for t in todo])
+            if self.wrench is not None:
+                results = self.executor.map(_marker_wrench_job,
+                                            [(self.job(t), self.s, self.wrench) for t in todo])
+            else:
+                results = self.executor.map(_marker_job, [(self.job(t), self.s) for t in todo])
             self.runs += len(todo)
             for t, pts in zip(todo, results):
                 self._cache[tuple(t)] = self._residuals_of(pts)
@@ -225,11 +253,14 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
         overrides: Optional[Dict[str, object]] = None, backend: str = "auto",
         corde_run: Optional[str] = None, executor=None, confidence: float = 0.95,
         max_ci_factor: float = 2.0, max_iterations: int = 30, diff_step: float = 1e-3,
-        log: Callable[[str], None] = lambda s: None, statics: bool = False) -> FitResult:
+        log: Callable[[str], None] = lambda s: None, statics: bool = False,
+        wrench: Optional[WrenchSpec] = None, tracking_noise: float = 1e-3) -> FitResult:
     """Fits params to the recording (arc lengths given, or projected onto the rod at the first
     frame with the starting parameters). statics: every frame is the cable at rest, compared
     with the static equilibrium at its time (the drives and grasps where they are then), not
-    with a run. Parameters whose confidence interval spans more than a
+    with a run. wrench: the gripper's measured wrenches (fit_wrench.wrench_spec), compared with
+    the simulated grasp reaction, each residual divided by its noise (the points' by
+    tracking_noise, m). Parameters whose confidence interval spans more than a
     factor max_ci_factor either way (or that the residuals do not depend on) are refused as
     undetermined and kept at their starting value; the others are fitted again without them."""
     from scipy import optimize, stats
@@ -238,6 +269,8 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
     overrides = dict(overrides or {})
     if not params:
         raise FitError("nothing to fit: give at least one parameter")
+    if not (tracking_noise > 0 and math.isfinite(tracking_noise)):
+        raise FitError(f"--tracking-noise: must be a number > 0, got {tracking_noise}")
     for p in params:
         if not (p.initial > 0 and math.isfinite(p.initial)):
             raise FitError(f"{p.name}: the starting value must be > 0 (fitted in log space), "
@@ -259,7 +292,8 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
         while True:
             prob = Problem(scene, rec, active, rod,
                            {**overrides, **{p.key: p.initial for p in params if p not in active}},
-                           backend, corde_run, executor, diff_step=diff_step, statics=statics)
+                           backend, corde_run, executor, scale=tracking_noise,
+                           diff_step=diff_step, statics=statics, wrench=wrench)
             x0 = np.log([values[p.name] for p in active])
             # parameters the recording does not depend on at all: refused before fitting
             J0 = prob.jacobian(x0)
@@ -306,6 +340,9 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
                 if c and max(c)[0] > 0.9:
                     partner = (f"; it trades off against {max(c)[1]} (correlation "
                                f"{max(c)[0]:.3f}): the recording sees only their combination")
+                    if wrench is None and "rho" in (p.name, max(c)[1]):
+                        partner += (" (positions alone see forces only relative to the mass: "
+                                    "record the gripper's force to determine the density)")
             span = (f"a factor {math.exp(half[j]):.3g}" if half[j] < math.log(1e6) else
                     "more than a factor 1e6")
             undetermined[p.name] = (f"its {confidence:.0%} interval would span {span} either way "
@@ -326,15 +363,24 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
                 + ", ".join(f"{s:.4f}" for s in rec.arc_lengths) + " m")
     names = [p.name for p in params]
     ci, frame_rms, corr_full = {}, np.zeros(len(rec.times)), None
-    rms = sigma = float("nan")
+    rms = sigma = force_rms = torque_rms = float("nan")
+    frame_force = frame_torque = None
     sv_out = np.array([])
     if active:
         for k, p in enumerate(active):
             ci[p.name] = (float(np.exp(theta[k] - half[k])), float(np.exp(theta[k] + half[k])))
-        d = (r * prob.scale).reshape(len(rec.times), -1, 3)
+        npos = rec.points.size
+        d = (r[:npos] * prob.scale).reshape(len(rec.times), -1, 3)
         frame_rms = np.sqrt(np.mean(np.sum(d * d, axis=2), axis=1))
         rms = float(np.sqrt(np.mean(d * d)))
         sigma = float(math.sqrt(s2) * prob.scale)
+        if wrench is not None:
+            sim_w = r[npos:].reshape(wrench.values.shape) * wrench.scale() + wrench.values
+            frame_force, frame_torque = frame_errors(wrench, sim_w)
+            dw = sim_w - wrench.values
+            force_rms = float(np.sqrt(np.mean(dw[:, :3] ** 2)))
+            torque_rms = float(np.sqrt(np.mean(dw[:, 3:] ** 2))) if wrench.columns == 6 else \
+                float("nan")
         sd = np.sqrt(np.diag(cov))
         corr_full = cov / np.outer(sd, sd)
         sv_out = sv
@@ -347,7 +393,11 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
         correlation=corr_full if corr_full is not None else np.zeros((0, 0)),
         runs=runs, iterations=iterations, wall_time=_time.perf_counter() - t_start,
         workers=getattr(executor, "workers", 1), sigma=sigma, arc_lengths=rec.arc_lengths,
-        overrides=final)
+        overrides=final, wrench_times=None if wrench is None else wrench.times,
+        frame_force=frame_force, frame_torque=frame_torque, force_rms=force_rms,
+        torque_rms=torque_rms, tracking_noise=tracking_noise,
+        force_noise=float("nan") if wrench is None else wrench.force_noise,
+        torque_noise=float("nan") if wrench is None else wrench.torque_noise)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -370,16 +420,41 @@ def report_text(res: FitResult, params: List[Parameter]) -> str:
         lines.append(f"residual          RMS {res.rms * 1e3:.4g} mm per coordinate (noise estimate "
                      f"{res.sigma * 1e3:.4g} mm), per frame {np.min(res.frame_rms) * 1e3:.3g} to "
                      f"{np.max(res.frame_rms) * 1e3:.3g} mm (RMS distance of the points)")
+    if res.ci and res.frame_force is not None:
+        lines.append(f"force residual    RMS {res.force_rms:.4g} N per component (noise given "
+                     f"{res.force_noise:.4g} N), per frame {np.min(res.frame_force):.3g} to "
+                     f"{np.max(res.frame_force):.3g} N")
+        if res.frame_torque is not None:
+            lines.append(f"torque residual   RMS {res.torque_rms:.4g} N m per component (noise "
+                         f"given {res.torque_noise:.4g} N m), per frame "
+                         f"{np.min(res.frame_torque):.3g} to {np.max(res.frame_torque):.3g} N m")
     lines.append(f"cost              {res.runs} runs, {res.iterations} evaluations, "
                  f"{res.wall_time:.2f} s wall on {res.workers} worker(s)")
     return "\n".join(lines)
 
 
 def write_residuals_csv(path: str, res: FitResult) -> None:
+    """`time,rms_mm` per frame of the points; with wrenches also `force_n` (and `torque_nm`) per
+    wrench frame, rows merged by time (a cell is empty where that kind has no frame)."""
+    if res.frame_force is None:
+        with open(path, "w") as f:
+            f.write("time,rms_mm\n")
+            for t, e in zip(res.times, res.frame_rms):
+                f.write(f"{t:.9g},{e * 1e3:.6g}\n")
+        return
+    rows: Dict[float, list] = {}
+    for t, e in zip(res.times, res.frame_rms):
+        rows.setdefault(float(t), ["", "", ""])[0] = f"{e * 1e3:.6g}"
+    for k, t in enumerate(res.wrench_times):
+        row = rows.setdefault(float(t), ["", "", ""])
+        row[1] = f"{res.frame_force[k]:.6g}"
+        if res.frame_torque is not None:
+            row[2] = f"{res.frame_torque[k]:.6g}"
+    torque = res.frame_torque is not None
     with open(path, "w") as f:
-        f.write("time,rms_mm\n")
-        for t, e in zip(res.times, res.frame_rms):
-            f.write(f"{t:.9g},{e * 1e3:.6g}\n")
+        f.write("time,rms_mm,force_n" + (",torque_nm" if torque else "") + "\n")
+        for t in sorted(rows):
+            f.write(f"{t:.9g}," + ",".join(rows[t][:3 if torque else 2]) + "\n")
 
 
 def write_fitted_scene(scene_path: str, out_path: str, res: FitResult,

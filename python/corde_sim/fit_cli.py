@@ -11,11 +11,12 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
-from .fit import (PARAMETERS, FitError, Job, Parameter, ToolChain, fit, get_key, grasp_segment,
+from .fit import (FORCE_NOISE, PARAMETERS, TORQUE_NOISE, FitError, Job, Parameter, ToolChain, fit, get_key, grasp_segment,
                   gripper_keyframes, load_scene_yaml, make_executor, material_file_data,
                   read_recording, report_text, rod_length, simulate, synthesize,
                   write_bag_recording, write_csv_recording, write_fitted_scene,
                   write_keyframe_csv, write_material_file, write_residuals_csv, yaml_load)
+from .fit_wrench import synthesize_wrenches, wrench_spec
 
 # ---------------------------------------------------------------------------------------------
 # Command line
@@ -27,6 +28,9 @@ examples:
   corde_fit cable.yaml run.bag --points-topic /cable/points --gripper-topic /gripper/pose \\
             --grasp gripper --fit E,damping_time --workers 2
   corde_fit record cable.yaml recording.csv --points 15 --noise 0.001 --every 0.05
+  corde_fit record cable.yaml rec.csv --wrench gripper --force-noise 0.003 --torque-noise 3e-4
+  corde_fit cable.yaml rec.csv --grasp gripper --force-noise 0.003 --torque-noise 3e-4 \
+            --fit E,G,damping_time,drag,rho
 
 parameters (--fit): %s, or NAME=key.path for any scene key
 """ % ", ".join(PARAMETERS)
@@ -120,6 +124,15 @@ def main_record(argv) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--statics", action="store_true",
                     help="each frame the static equilibrium at its time (a cable at rest)")
+    ap.add_argument("--wrench", default=None, metavar="GRASP",
+                    help="also record this grasp's wrench on the gripper (a force-torque sensor)")
+    ap.add_argument("--force-noise", type=float, default=FORCE_NOISE,
+                    help="the wrench's force noise (N, 1 sigma; default %(default)s)")
+    ap.add_argument("--torque-noise", type=float, default=TORQUE_NOISE,
+                    help="its torque noise (N m, 1 sigma; default %(default)s)")
+    ap.add_argument("--forces-only", action="store_true", help="record no torques")
+    ap.add_argument("--wrench-frame", choices=["world", "holder"], default="world",
+                    help="a .bag's wrench frame: world, or the grasp's holder frame grasp/NAME")
     ap.add_argument("--corde-run", default=None)
     a = ap.parse_args(argv)
     doc = load_scene_yaml(a.scene)
@@ -132,10 +145,20 @@ def main_record(argv) -> int:
     length = rod_length(a.scene, ov, rod, a.corde_run)
     s = np.linspace(0.0, length, a.points + 2)[1:-1] if a.points > 1 else np.array([length / 2])
     seg = grasp_segment(doc, a.grasp)[1] if a.grasp else None
-    rec = synthesize(a.scene, ov, rod, times, s, a.noise, a.seed, corde_run=a.corde_run,
-                     gripper_segment=seg, statics=a.statics)
+    if a.wrench:
+        if a.grasp:
+            raise FitError("--wrench and --grasp: record the gripper's poses or its wrench")
+        if a.wrench_frame == "holder" and not a.out.endswith(".bag"):
+            raise FitError("--wrench-frame holder: a CSV holds wrenches in the world frame")
+        rec = synthesize_wrenches(a.scene, ov, rod, times, s, a.noise, a.seed, a.wrench,
+                                  a.force_noise, None if a.forces_only else a.torque_noise,
+                                  a.wrench_frame, a.statics)
+    else:
+        rec = synthesize(a.scene, ov, rod, times, s, a.noise, a.seed, corde_run=a.corde_run,
+                         gripper_segment=seg, statics=a.statics)
     if a.out.endswith(".bag"):
-        write_bag_recording(a.out, rec)
+        write_bag_recording(a.out, rec, wrench_frame_id=f"grasp/{a.wrench}"
+                            if a.wrench_frame == "holder" else None)
     else:
         if a.grasp:
             raise FitError("--grasp: gripper poses go into a .bag recording only")
@@ -180,6 +203,18 @@ def main(argv=None) -> int:
                         help="the URDF link holding the cable (with --urdf)")
         ap.add_argument("--keyframe-rate", type=float, default=50.0,
                         help="gripper poses per second turned into keyframes")
+        ap.add_argument("--wrench-topic", default=None,
+                        help="geometry_msgs/WrenchStamped topic: the wrench the cable exerts on "
+                             "the gripper of --grasp (a .bag; a CSV has columns fx,fy,fz,...)")
+        ap.add_argument("--world-frame", default="world",
+                        help="the frame_id of wrenches in the world frame (default %(default)s)")
+        ap.add_argument("--tracking-noise", type=float, default=1e-3,
+                        help="the tracked points' noise (m, 1 sigma; default %(default)s): "
+                             "their residuals' unit")
+        ap.add_argument("--force-noise", type=float, default=FORCE_NOISE,
+                        help="the measured forces' noise (N, 1 sigma; default %(default)s)")
+        ap.add_argument("--torque-noise", type=float, default=TORQUE_NOISE,
+                        help="the measured torques' noise (N m, 1 sigma; default %(default)s)")
         ap.add_argument("--out", default=None,
                         help="fitted scene to write (default: SCENE_fitted.yaml beside SCENE)")
         ap.add_argument("--residuals", default=None, help="CSV of the residual per frame")
@@ -218,7 +253,8 @@ def _main_fit(a) -> int:
             raise FitError("--urdf and --tool-link go together (the robot and the link that "
                            "holds the cable)")
         tool = ToolChain(a.urdf, a.tool_link)
-    rec = read_recording(a.recording, a.points_topic, a.gripper_topic, tool)
+    rec = read_recording(a.recording, a.points_topic, a.gripper_topic, tool, a.wrench_topic,
+                         a.grasp, a.world_frame)
     if a.arc_lengths:
         try:
             rec.arc_lengths = np.array([float(v) for v in a.arc_lengths.split(",")])
@@ -249,11 +285,27 @@ def _main_fit(a) -> int:
             log(f"gripper: {len(keys)} keyframes from {len(rec.gripper[0])} poses -> {out_kf}")
         params = build_parameters(doc, a.fit.split(","), rod, a.obstacle, _parse_kv(a.initial,
                                                                                     "--initial"))
+        wspec = None
+        if rec.wrenches is not None:
+            grasp = a.grasp
+            if not grasp:
+                names = [g.get("name") for g in (doc.get("grasps") or []) if isinstance(g, dict)]
+                if len(names) != 1:
+                    raise FitError(f"{a.recording}: the recording has wrenches: name the grasp "
+                                   f"holding the sensor with --grasp NAME (grasps: "
+                                   f"{', '.join(map(str, names)) or 'none'})")
+                grasp = names[0]
+            wspec = wrench_spec(rec, grasp, grasp_segment(doc, grasp)[1], a.force_noise,
+                                a.torque_noise)
+            kinds = "force and torque" if wspec.columns == 6 else "force"
+            log(f"wrenches: {len(wspec.times)} frames of {kinds} ({wspec.frame} frame) at grasp "
+                f"'{grasp}', noise {a.force_noise:g} N"
+                + (f", {a.torque_noise:g} N m" if wspec.columns == 6 else ""))
         executor = make_executor(a.workers, a.scheduler)
         try:
             res = fit(a.scene, rec, params, rod, ov, a.backend, a.corde_run, executor,
                       a.confidence, a.max_ci_factor, a.max_iterations, log=log,
-                      statics=a.statics)
+                      statics=a.statics, wrench=wspec, tracking_noise=a.tracking_noise)
         finally:
             executor.close()
     finally:

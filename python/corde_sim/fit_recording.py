@@ -25,12 +25,18 @@ class Recording:
 
     times (F,), points (F, M, 3) in m; arc_lengths (M,) in m or None (estimated by projection);
     gripper: None or (times (K,), positions (K, 3), quaternions (K, 4) as [qx, qy, qz, qw]).
+    wrenches: None or the gripper's measured wrench, (times (W,), values (W, 3) forces or (W, 6)
+    forces and torques): what a force-torque sensor reads, the force (N) the cable exerts on the
+    gripper and its torque (N m) about the grasped segment's midpoint, in wrench_frame: "world",
+    or "holder" (the grasp's holder frame, the node's grasp/<name>).
     """
 
     times: np.ndarray
     points: np.ndarray
     arc_lengths: Optional[np.ndarray] = None
     gripper: Optional[tuple] = None
+    wrenches: Optional[tuple] = None
+    wrench_frame: str = "world"
 
     def check(self, source: str = "recording") -> None:
         t, p = self.times, self.points
@@ -51,6 +57,19 @@ class Recording:
                 raise FitError(f"{source}: {len(s)} arc lengths for {p.shape[1]} points")
             if np.any(s < 0) or not np.all(np.isfinite(s)):
                 raise FitError(f"{source}: arc lengths must be finite and >= 0")
+        if self.wrenches is not None:
+            wt, wv = self.wrenches
+            if wv.ndim != 2 or wv.shape[1] not in (3, 6) or len(wt) != len(wv) or len(wt) < 1:
+                raise FitError(f"{source}: wrenches must be times x 3 (force) or x 6 (force, "
+                               f"torque), got {wv.shape}")
+            if not np.all(np.isfinite(wt)) or not np.all(np.isfinite(wv)):
+                raise FitError(f"{source}: non-finite wrench time or value")
+            if np.any(np.diff(wt) <= 0) or wt[0] < 0:
+                raise FitError(f"{source}: wrench times must be >= 0 and increase strictly")
+
+
+# A CSV recording's wrench columns, after the points' (docs/calibration.md).
+WRENCH_COLUMNS = ["fx", "fy", "fz", "tx", "ty", "tz"]
 
 
 def write_csv_recording(path: str, rec: Recording) -> None:
@@ -61,14 +80,24 @@ def write_csv_recording(path: str, rec: Recording) -> None:
         if rec.arc_lengths is not None:
             f.write("# arc_length," + ",".join(repr(float(s)) for s in rec.arc_lengths) + "\n")
         w = csv.writer(f)
-        w.writerow(["time"] + [f"{c}{i}" for i in range(m) for c in "xyz"])
-        for t, pts in zip(rec.times, rec.points):
-            w.writerow([repr(float(t))] + [repr(float(v)) for v in pts.reshape(-1)])
+        wcols = []
+        if rec.wrenches is not None:
+            if rec.wrench_frame != "world" or not np.array_equal(rec.wrenches[0], rec.times):
+                raise FitError(f"{path}: a CSV holds wrenches in the world frame at the frames' "
+                               f"times")
+            wcols = WRENCH_COLUMNS[: rec.wrenches[1].shape[1]]
+        w.writerow(["time"] + [f"{c}{i}" for i in range(m) for c in "xyz"] + wcols)
+        for k, (t, pts) in enumerate(zip(rec.times, rec.points)):
+            row = [repr(float(t))] + [repr(float(v)) for v in pts.reshape(-1)]
+            if wcols:
+                row += [repr(float(v)) for v in rec.wrenches[1][k]]
+            w.writerow(row)
 
 
 def read_csv_recording(path: str) -> Recording:
-    """Reads a recording CSV: a header `time,x0,y0,z0,x1,...`, one row per frame; `#` lines are
-    comments, except `# arc_length,s0,s1,...` which gives the points' arc lengths (m)."""
+    """Reads a recording CSV: a header `time,x0,y0,z0,x1,...` (optionally ending in the gripper's
+    measured wrench, `fx,fy,fz` or `fx,fy,fz,tx,ty,tz`, world frame), one row per frame; `#`
+    lines are comments, except `# arc_length,s0,s1,...` which gives the points' arc lengths (m)."""
     arc = None
     rows = []
     header = None
@@ -92,7 +121,12 @@ def read_csv_recording(path: str) -> Recording:
             cells = [c.strip() for c in line.split(",")]
             if header is None:
                 header = cells
-                if header[0] != "time" or (len(header) - 1) % 3 != 0 or len(header) < 4:
+                nw = next((k for k in (6, 3) if header[-k:] == WRENCH_COLUMNS[:k]), 0)
+                if "fx" in header and not nw:
+                    raise FitError(f"{path} line {lineno}: the wrench columns must close the "
+                                   f"header as fx,fy,fz or fx,fy,fz,tx,ty,tz, got '{line}'")
+                if (header[0] != "time" or (len(header) - 1 - nw) % 3 != 0
+                        or len(header) - nw < 4):
                     raise FitError(f"{path} line {lineno}: header must be time,x0,y0,z0,... "
                                    f"(3 columns per point), got '{line}'")
                 continue
@@ -106,7 +140,11 @@ def read_csv_recording(path: str) -> Recording:
     if header is None:
         raise FitError(f"{path}: no header line (time,x0,y0,z0,...)")
     data = np.array(rows).reshape(len(rows), len(header))
-    rec = Recording(times=data[:, 0], points=data[:, 1:].reshape(len(rows), -1, 3), arc_lengths=arc)
+    nw = next((k for k in (6, 3) if header[-k:] == WRENCH_COLUMNS[:k]), 0)
+    rec = Recording(times=data[:, 0], points=data[:, 1:len(header) - nw].reshape(len(rows), -1, 3),
+                    arc_lengths=arc)
+    if nw:
+        rec.wrenches = (data[:, 0].copy(), data[:, len(header) - nw:].copy())
     rec.check(path)
     return rec
 
@@ -166,12 +204,15 @@ class ToolChain:
 
 def read_bag_recording(path: str, points_topic: str = "/cable/points",
                        gripper_topic: Optional[str] = None,
-                       tool: Optional[ToolChain] = None) -> Recording:
+                       tool: Optional[ToolChain] = None, wrench_topic: Optional[str] = None,
+                       grasp: Optional[str] = None, world_frame: str = "world") -> Recording:
     """Reads a rosbag: tracked points as geometry_msgs/PoseArray (positions in order along the
     cable) or sensor_msgs/PointCloud2 (fields x, y, z, in order), the gripper as
     geometry_msgs/PoseStamped, or as sensor_msgs/JointState turned into the tool frame's pose by
     `tool` (forward kinematics). Times are the messages' header stamps minus the first points
-    message's stamp (scene time 0)."""
+    message's stamp (scene time 0). wrench_topic: geometry_msgs/WrenchStamped, the force and
+    torque the cable exerts on the gripper, in world_frame (or an empty frame_id) or in the
+    grasp's holder frame (a frame_id ending in grasp/<grasp>, as the node's reaction topic)."""
     try:
         import rosbag  # python3-rosbag (Debian)
     except ImportError:
@@ -181,7 +222,9 @@ def read_bag_recording(path: str, points_topic: str = "/cable/points",
     except Exception as e:  # rosbag raises its own types (ROSBagException, IOError)
         raise FitError(f"{path}: cannot open as a rosbag: {e}") from None
     times, frames, gt, gp, gq = [], [], [], [], []
+    wt, wv, wframes = [], [], set()
     topics = [points_topic] + ([gripper_topic] if gripper_topic else [])
+    topics += [wrench_topic] if wrench_topic else []
     with bag:
         info = bag.get_type_and_topic_info().topics
         for t in topics:
@@ -192,6 +235,14 @@ def read_bag_recording(path: str, points_topic: str = "/cable/points",
             if topic == points_topic:
                 times.append(st)
                 frames.append(_points_of_message(msg, path, topic))
+            elif topic == wrench_topic:
+                if msg._type != "geometry_msgs/WrenchStamped":
+                    raise FitError(f"{path}: '{topic}' has {msg._type}; the gripper's wrench must "
+                                   f"be geometry_msgs/WrenchStamped")
+                fr, tq = msg.wrench.force, msg.wrench.torque
+                wt.append(st)
+                wv.append([fr.x, fr.y, fr.z, tq.x, tq.y, tq.z])
+                wframes.add(msg.header.frame_id.lstrip("/"))
             elif msg._type == "sensor_msgs/JointState":
                 if tool is None:
                     raise FitError(f"{path}: '{topic}' has joint states: give the robot's URDF "
@@ -227,6 +278,25 @@ def read_bag_recording(path: str, points_topic: str = "/cable/points",
             raise FitError(f"{path}: no messages on '{gripper_topic}'")
         o = np.argsort(gt, kind="stable")
         rec.gripper = (np.array(gt)[o] - t0, np.array(gp)[o], np.array(gq)[o])
+    if wrench_topic:
+        if not wt:
+            raise FitError(f"{path}: no messages on '{wrench_topic}'")
+        if len(wframes) != 1:
+            raise FitError(f"{path}: '{wrench_topic}': the frame_id changes ({sorted(wframes)})")
+        frame = wframes.pop()
+        if frame in ("", world_frame.lstrip("/")):
+            rec.wrench_frame = "world"
+        elif grasp and (frame == f"grasp/{grasp}" or frame.endswith(f"/grasp/{grasp}")
+                        or frame.endswith(f"grasp/{grasp}")):
+            rec.wrench_frame = "holder"
+        else:
+            raise FitError(f"{path}: '{wrench_topic}' is in frame '{frame}': give wrenches in the "
+                           f"world frame ('{world_frame}', --world-frame) or the grasp's holder "
+                           f"frame grasp/{grasp or 'NAME'} (with --grasp NAME)")
+        o = np.argsort(wt, kind="stable")
+        wtimes = np.array(wt)[o] - t0
+        keep = wtimes >= 0  # before the first points message: not scene time
+        rec.wrenches = (wtimes[keep], np.array(wv)[o][keep])
     rec.check(f"{path}:{points_topic}")
     return rec
 
@@ -245,10 +315,31 @@ def _points_of_message(msg, path, topic):
 def write_bag_recording(path: str, rec: Recording, points_topic: str = "/cable/points",
                         gripper_topic: str = "/gripper/pose", frame_id: str = "world",
                         start: float = 1.0, joints: Optional[tuple] = None,
-                        joint_topic: str = "/joint_states") -> None:
+                        joint_topic: str = "/joint_states", wrench_topic: str = "/gripper/wrench",
+                        wrench_frame_id: Optional[str] = None) -> None:
     """Writes a recording as a rosbag in the format read_bag_recording reads (PoseArray points,
-    PoseStamped gripper), stamped from `start` s (a bag cannot hold time 0). joints: (times (K,),
-    names, values (K, J)) written as sensor_msgs/JointState on joint_topic."""
+    PoseStamped gripper, WrenchStamped wrenches on wrench_topic in wrench_frame_id, default
+    frame_id), stamped from `start` s (a bag cannot hold time 0). joints: (times (K,), names,
+    values (K, J)) written as sensor_msgs/JointState on joint_topic."""
+    _write_bag_events(path, rec, points_topic, gripper_topic, frame_id, start, joints, joint_topic)
+    if rec.wrenches is not None:
+        import rosbag
+        import rospy
+        from geometry_msgs.msg import WrenchStamped
+
+        with rosbag.Bag(path, "a") as bag:
+            for t, w in zip(*rec.wrenches):
+                stamp = rospy.Time.from_sec(start + t)
+                msg = WrenchStamped()
+                msg.header.stamp, msg.header.frame_id = stamp, wrench_frame_id or frame_id
+                w = list(map(float, w)) + [0.0] * (6 - len(w))
+                msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = w[:3]
+                msg.wrench.torque.x, msg.wrench.torque.y, msg.wrench.torque.z = w[3:]
+                bag.write(wrench_topic, msg, stamp)
+
+
+def _write_bag_events(path, rec, points_topic, gripper_topic, frame_id, start, joints,
+                      joint_topic):
     import rosbag
     import rospy
     from geometry_msgs.msg import Pose, PoseArray, PoseStamped
@@ -291,9 +382,14 @@ def write_bag_recording(path: str, rec: Recording, points_topic: str = "/cable/p
 
 def read_recording(path: str, points_topic: str = "/cable/points",
                    gripper_topic: Optional[str] = None,
-                   tool: Optional[ToolChain] = None) -> Recording:
+                   tool: Optional[ToolChain] = None, wrench_topic: Optional[str] = None,
+                   grasp: Optional[str] = None, world_frame: str = "world") -> Recording:
     if path.endswith(".bag"):
-        return read_bag_recording(path, points_topic, gripper_topic, tool)
+        return read_bag_recording(path, points_topic, gripper_topic, tool, wrench_topic, grasp,
+                                  world_frame)
+    if wrench_topic:
+        raise FitError(f"{path}: a CSV recording has its wrenches in columns fx,fy,fz[,tx,ty,tz], "
+                       f"not on a topic")
     if gripper_topic:
         raise FitError(f"{path}: a CSV recording has no gripper poses; the scene's grasp "
                        f"keyframes give the motion (use a rosbag for recorded poses)")

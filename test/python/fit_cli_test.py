@@ -101,6 +101,64 @@ class Bag(unittest.TestCase):
             self.assertEqual(runs[1], runs[0])
 
 
+
+class Wrenches(unittest.TestCase):
+    def test_bag_with_wrench_stamped_in_the_holder_frame(self):
+        # The gripper's sensor as the node's grasps/<name>/reaction topic publishes it:
+        # geometry_msgs/WrenchStamped in the holder frame grasp/gripper.
+        with tempfile.TemporaryDirectory() as tmp:
+            bag = os.path.join(tmp, "rec.bag")
+            p = corde_fit("record", SCENE, bag, "--points", "12", "--every", "0.05", "--seed",
+                          "4", "--wrench", "gripper", "--force-noise", "0.003",
+                          "--torque-noise", "1.5e-4", "--wrench-frame", "holder")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            import rosbag
+
+            with rosbag.Bag(bag) as b:
+                msgs = [m for _, m, _ in b.read_messages(topics=["/gripper/wrench"])]
+            self.assertEqual(msgs[0]._type, "geometry_msgs/WrenchStamped")
+            self.assertEqual(msgs[0].header.frame_id, "grasp/gripper")
+            res = os.path.join(tmp, "res.csv")
+            p = corde_fit(SCENE, bag, "--wrench-topic", "/gripper/wrench", "--grasp", "gripper",
+                          "--force-noise", "0.003", "--torque-noise", "1.5e-4", "--fit",
+                          "E,rho", "--initial", "E=4e7", "--initial", "rho=2500",
+                          "--arc-lengths", ",".join(repr(x) for x in np.linspace(
+                              0, F.rod_length(SCENE, {}, "cable", None), 14)[1:-1]),
+                          "--out", os.path.join(tmp, "fitted.yaml"), "--residuals", res)
+            print(p.stdout, p.stderr, file=sys.stderr)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertRegex(p.stdout, r"force residual\s+RMS")
+            self.assertRegex(p.stdout, r"torque residual\s+RMS")
+            m = F.load_scene_yaml(os.path.join(tmp, "fitted.yaml"))["rods"][0]["material"]
+            self.assertLess(abs(m["rho"] / 2000 - 1), 0.02)
+            self.assertLess(abs(m["E"] / 3e7 - 1), 0.02)
+            with open(res) as f:
+                self.assertEqual(f.readline().strip(), "time,rms_mm,force_n,torque_nm")
+            r = np.loadtxt(res, delimiter=",", skiprows=1)
+            self.assertEqual(r.shape, (33, 4))
+            self.assertLess(np.sqrt(np.mean(r[:, 2] ** 2)), 2 * 0.003)
+
+    def test_csv_wrench_columns_and_messages(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            csv = os.path.join(tmp, "rec.csv")
+            p = corde_fit("record", SCENE, csv, "--points", "8", "--every", "0.1", "--wrench",
+                          "gripper", "--forces-only", "--force-noise", "0.003")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            rec = F.read_recording(csv)
+            self.assertEqual(rec.wrenches[1].shape, (17, 3))
+            with open(csv) as f:
+                header = [x for x in f if not x.startswith("#")][0].strip().split(",")
+            self.assertEqual(header[-3:], ["fx", "fy", "fz"])
+            p = corde_fit(SCENE, csv, "--fit", "rho", "--force-noise", "0", "--out",
+                          os.path.join(tmp, "f.yaml"))
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("--force-noise: must be a number > 0, got 0", p.stderr)
+            with open(os.path.join(tmp, "bad.csv"), "w") as f:
+                f.write("time,x0,y0,z0,fx,fy\n0,0,0,1,0,0\n")
+            p = corde_fit(SCENE, os.path.join(tmp, "bad.csv"), "--fit", "rho")
+            self.assertEqual(p.returncode, 1)
+            self.assertIn("the wrench columns must close the header", p.stderr)
+
 class JointStates(unittest.TestCase):
     URDF = os.path.join(ROOT, "urdf", "cell_example.urdf")
 

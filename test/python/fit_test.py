@@ -108,6 +108,72 @@ class Undetermined(unittest.TestCase):
         self.assertRegex(why, "trades off against (E|G|drag|rho)|more than a factor 1e6")
 
 
+class Forces(unittest.TestCase):
+    """The gripper's measured wrench (force and torque on the gripper, 1 % of the cable's weight
+    as force noise, that times 5 cm as torque noise) with the points: the force fixes the scale
+    that positions alone cannot see, so density is fitted with the stiffnesses, friction and
+    drag. Short mode 2 seeds, --long 10 (docs/calibration.md, "Forces")."""
+
+    def test_density_recovered_with_forces(self):
+        weight = 2000 * np.pi * 0.003 ** 2 * 0.5 * 9.81
+        fn, tn = 0.01 * weight, 0.01 * weight * 0.05
+        truth = {**TRUTH, "rho": 2000.0}
+        names = ["E", "G", "damping_time", "drag", "rho"]
+        start = {**START, "rho": 2600.0}
+        seeds = range(1, 11) if LONG else range(1, 3)
+        s = arc_lengths()
+        covered = {n: 0 for n in names}
+        for seed in seeds:
+            rec = F.synthesize_wrenches(SCENE, {}, "cable", TIMES, s, NOISE, seed, "gripper",
+                                        fn, tn)
+            spec = F.wrench_spec(rec, "gripper", 11, fn, tn)
+            p = [F.Parameter(n, F.PARAMETERS[n][0].format(rod="cable", obstacle="0"), start[n])
+                 for n in names]
+            res = F.fit(SCENE, rec, p, "cable", wrench=spec)
+            log(f"forces seed {seed}: " + ", ".join(
+                f"{n} {res.values[n] / truth[n] - 1:+.2%} [{res.ci[n][0] / truth[n] - 1:+.2%}, "
+                f"{res.ci[n][1] / truth[n] - 1:+.2%}]" for n in names)
+                + f"; rms {res.rms * 1e3:.3f} mm, force {res.force_rms * 1e3:.3f} mN, torque "
+                f"{res.torque_rms * 1e3:.4f} mN m, {res.runs} runs, {res.wall_time:.1f} s")
+            self.assertEqual(res.undetermined, {})
+            self.assertLess(abs(res.values["rho"] / truth["rho"] - 1), 0.02, seed)
+            for n in ("E", "G"):
+                self.assertLess(abs(res.values[n] / truth[n] - 1), 0.02, (seed, n))
+            self.assertLess(abs(res.rms / NOISE - 1), 0.1)
+            # the residuals per frame of both kinds, at their noise
+            self.assertEqual(res.frame_force.shape, (len(TIMES),))
+            self.assertEqual(res.frame_torque.shape, (len(TIMES),))
+            self.assertLess(abs(res.force_rms / fn - 1), 0.25)
+            self.assertLess(abs(res.torque_rms / tn - 1), 0.25)
+            self.assertRegex(F.report_text(res, p), r"force residual\s+RMS .* N per component")
+            for n in names:
+                lo, hi = res.ci[n]
+                covered[n] += lo <= truth[n] <= hi
+        log(f"forces: coverage of the 95% intervals over {len(seeds)} seeds: {covered}")
+        for n in names:
+            self.assertGreaterEqual(covered[n], len(seeds) - 1, n)
+
+    def test_density_alone_refused_without_forces_determined_with_them(self):
+        # The same recording, with and without its wrench columns: E, drag and rho together.
+        weight = 2000 * np.pi * 0.003 ** 2 * 0.5 * 9.81
+        rec = F.synthesize_wrenches(SCENE, {}, "cable", TIMES[::2], arc_lengths(), NOISE, 3,
+                                    "gripper", 0.01 * weight)
+        p = [F.Parameter(n, F.PARAMETERS[n][0].format(rod="cable", obstacle="0"), TRUTH[n])
+             for n in ("E", "G", "drag")] + [F.Parameter("rho", "rods.cable.material.rho", 2500.0)]
+        spec = F.wrench_spec(rec, "gripper", 11, 0.01 * weight, 1.0)
+        self.assertEqual(spec.columns, 3)  # forces only
+        with_forces = F.fit(SCENE, rec, p, "cable", wrench=spec)
+        log(f"E, G, drag, rho with forces: rho {with_forces.values['rho']:.2f} "
+            f"{with_forces.ci.get('rho')}, undetermined {with_forces.undetermined}")
+        self.assertEqual(with_forces.undetermined, {})
+        self.assertLess(abs(with_forces.values["rho"] / 2000 - 1), 0.02)
+        rec.wrenches = None
+        without = F.fit(SCENE, rec, p, "cable", max_iterations=6)
+        self.assertEqual(len(without.undetermined), 1)
+        (name, why), = without.undetermined.items()
+        self.assertRegex(why, "trades off against|more than a factor 1e6")
+
+
 class Mismatch(unittest.TestCase):
     def test_finer_rod_other_integrator_fitted_at_the_noise(self):
         # Recorded with 4x the elements and implicit Euler at a quarter of the step, fitted with

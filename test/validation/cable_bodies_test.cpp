@@ -40,6 +40,7 @@ Material stiff_material(double radius) {
 struct PendulumCase {
   int elements = 10;
   double length = 1.0, radius = 0.02, tip_mass = 0.0, tip_inertia = 0.0;
+  double offset = 0.0;  // the tip body's centre of mass this far beyond the tip, along the rod
 };
 
 double pendulum_reference(const PendulumCase& c) {
@@ -48,8 +49,12 @@ double pendulum_reference(const PendulumCase& c) {
   const double rod =
       m * c.length * c.length / 3.0 *
       (1.0 + 1.0 / (2.0 * n * n) + 0.75 * c.radius * c.radius / (c.length * c.length));
-  const double inertia = rod + c.tip_mass * c.length * c.length + c.tip_inertia;
-  const double moment = kG * (0.5 * m * c.length + c.tip_mass * c.length);
+  // An offset body: its weight at L + a; its inertia about the tip node by the parallel axis,
+  // M a^2, the model's block-diagonal mass (docs/scene_format.md, "Cable bodies"; a rigid body
+  // would have M (L + a)^2 in all, 2 M L a more).
+  const double inertia =
+      rod + c.tip_mass * c.length * c.length + c.tip_inertia + c.tip_mass * c.offset * c.offset;
+  const double moment = kG * (0.5 * m * c.length + c.tip_mass * (c.length + c.offset));
   return 2.0 * kPi * std::sqrt(inertia / moment);
 }
 
@@ -60,6 +65,11 @@ Rod pendulum_rod(const PendulumCase& c, double theta0) {
   if (c.tip_mass > 0.0) rod.add_node_mass(c.elements, c.tip_mass);
   if (c.tip_inertia > 0.0)
     rod.add_segment_inertia(c.elements - 1, Vec3(c.tip_inertia, c.tip_inertia, 0.0));
+  if (c.offset > 0.0) {  // as the scene's masses[i].offset builds it
+    const double parallel = c.tip_mass * c.offset * c.offset;
+    rod.add_segment_inertia(c.elements - 1, Vec3(parallel, parallel, 0.0));
+    rod.add_mass_offset(c.elements, c.tip_mass, Vec3(0.0, 0.0, c.offset));
+  }
   return rod;
 }
 
@@ -280,6 +290,107 @@ TEST(CableBodies, ExplicitStepLimitFollowsMasses) {
   };
   EXPECT_LT(energy_after(0.9 * h_light), 10.0);
   EXPECT_GT(energy_after(std::min(0.9 * h_uniform, 3.0 * h_light)), 1e3);
+}
+
+// A plug whose centre of mass lies a = 0.2 L beyond the tip (masses[i].offset): its weight acts
+// there and turns the end segment, its inertia about the tip is J + M a^2. The small-angle period
+// against the compound pendulum of that model (moment g (m L/2 + M (L + a))), under the explicit
+// split rotation and BDF2; the offset changes the period by far more than the tolerance.
+TEST(CableBodies, OffsetPlugPendulumPeriod) {
+  PendulumCase c;
+  c.tip_mass = 1000.0 * kPi * c.radius * c.radius * c.length;
+  c.tip_inertia = 0.05 * c.tip_mass / 3.0;
+  c.offset = 0.2 * c.length;
+  PendulumCase no_offset = c;
+  no_offset.offset = 0.0;
+  const double ref = pendulum_reference(c);
+  const double explicit_t = pendulum_period(c, false);
+  const double implicit_t = pendulum_period(c, true, 1e-3);
+  // The rod's mass equals the plug's here.
+  const double moment = kG * c.tip_mass * (0.5 * c.length + c.length + c.offset);
+  const double inertia = moment * std::pow(ref / (2.0 * kPi), 2);
+  const double rigid =
+      2.0 * kPi * std::sqrt((inertia + 2.0 * c.tip_mass * c.length * c.offset) / moment);
+  std::printf(
+      "offset plug pendulum a = %.3g m: ref %.6f s, split_rotation %.6f s (%+.2e), bdf2 "
+      "%.6f s (%+.2e); without the offset %.6f s; a rigid body (2 M L a more inertia) "
+      "%.6f s\n",
+      c.offset, ref, explicit_t, explicit_t / ref - 1.0, implicit_t, implicit_t / ref - 1.0,
+      pendulum_reference(no_offset), rigid);
+  EXPECT_NEAR(explicit_t / ref, 1.0, 3e-3);
+  EXPECT_NEAR(implicit_t / ref, 1.0, 3e-3);
+  EXPECT_GT(std::abs(ref / pendulum_reference(no_offset) - 1.0), 0.02);
+}
+
+// The same pendulum swinging 30 degrees without damping under the explicit split rotation: the
+// total energy (gravity at the offset centre of mass, the parallel-axis rotary energy) stays
+// within 1 % of what the offset alone moves, M g a (1 - cos 30 deg), over a period.
+TEST(CableBodies, OffsetPlugPendulumKeepsItsEnergy) {
+  PendulumCase c;
+  c.tip_mass = 1000.0 * kPi * c.radius * c.radius * c.length;
+  c.offset = 0.2 * c.length;
+  const double theta0 = kPi / 6.0;
+  World world;
+  world.gravity = Vec3(0.0, 0.0, -kG);
+  world.add_rod(pendulum_rod(c, theta0));
+  Rod& rod = world.rods()[0];
+  world.time_step = 0.8 * critical_time_step(rod);
+  const auto total = [&] {
+    const Energies e = rod.energies(world.gravity);
+    return e.kinetic() + e.elastic() + e.gravity;
+  };
+  const double e0 = total();
+  double worst = 0.0;
+  const long steps = std::lround(1.1 * pendulum_reference(c) / world.time_step);
+  for (long k = 0; k < steps; ++k) {
+    world.step();
+    worst = std::max(worst, std::abs(total() - e0));
+  }
+  const double offset_part = c.tip_mass * kG * c.offset * (1.0 - std::cos(theta0));
+  std::printf("offset plug pendulum at 30 deg: energy drift %.3e J, the offset's share %.3e J\n",
+              worst, offset_part);
+  EXPECT_LT(worst, 0.01 * offset_part);
+}
+
+// A horizontal cantilever carrying a plug whose centre of mass lies a beyond the tip along the
+// tangent: the tip load P = M g and the moment P a give P L^3/(3B) + P L/kappa + P a L^2/(2B)
+// + q L^4/(8B) + q L^2/(2 kappa) (small deflections; the moment's arm shortens by O(slope^2)).
+// The error falls with N at second order, as the point-mass cantilever's does
+// (CantileverWithTipMass); the moment's share of the deflection, 7.9 %, is far above it.
+TEST(CableBodies, CantileverWithOffsetPlug) {
+  const Material m = val::example_material(1.0, 1e11);
+  const Section sec = make_section(m, val::kRadius);
+  const double q = sec.mass_per_length * kG, tip_mass = 0.5 * sec.mass_per_length;
+  const double p = tip_mass * kG, l = val::kLength, a = 0.1 * l;
+  const double moment_part = p * a * l * l / (2.0 * sec.bend);
+  const double ref = p * l * l * l / (3.0 * sec.bend) + p * l / sec.kappa + moment_part +
+                     q * l * l * l * l / (8.0 * sec.bend) + q * l * l / (2.0 * sec.kappa);
+  const Vec3 g(0.0, 0.0, -kG);
+  double prev = 0.0;
+  for (int n : {10, 20, 40}) {
+    Rod rod = val::straight_rod(m, n);
+    val::clamp_start(&rod, val::Clamp::kGhost);
+    ASSERT_NEAR(rod.orientations()[n - 1].toRotationMatrix().col(2).x(), 1.0, 1e-12);
+    rod.add_node_mass(n, tip_mass);
+    rod.add_segment_inertia(n - 1, Vec3(tip_mass * a * a, tip_mass * a * a, 0.0));
+    rod.add_mass_offset(n, tip_mass, Vec3(0.0, 0.0, a));
+    ASSERT_TRUE(solve_statics(rod, g, 0.0).converged);
+    const double d = -rod.positions()[n].z(), err = std::abs(d / ref - 1.0);
+    std::printf("cantilever offset plug N=%d: ref %.6e m, %.6e m (%+.2e)%s\n", n, ref, d,
+                d / ref - 1.0,
+                prev > 0.0 ? (" order " + std::to_string(std::log2(prev / err))).c_str() : "");
+    // Measured: 6.6e-3, 1.6e-3, 4.1e-4, second order as the point-mass cantilever.
+    EXPECT_LT(err, n == 10 ? 0.01 : n == 20 ? 3e-3 : 1e-3);
+    if (prev > 0.0) {
+      EXPECT_GT(std::log2(prev / err), 1.8);
+    }
+    prev = err;
+    // The clamp carries the weights and the moment of the plug's weight about the clamp.
+    rod.set_static_reactions(0.0, g);
+    const double weight = (sec.mass_per_length * l + tip_mass) * kG;
+    EXPECT_NEAR(rod.node_drive(0)->reaction.z(), weight, 1e-6 * weight);
+  }
+  EXPECT_GT(moment_part / ref, 0.05);  // 7.9 % of the deflection
 }
 
 }  // namespace

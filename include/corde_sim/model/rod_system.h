@@ -82,4 +82,8 @@ void coupling_hessian(const Vec3& d, const Quat& q, double rest, double kappa, M
 void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k, const Vec3& uhat,
                         Mat3* haa, Mat3* hab, Mat3* hbb, bool definite = false);
 
+// Gravity gb (body frame) on a mass at offset d from a node, fixed to the segment: d^2/dtheta^2
+// of -mass gb.(exp(theta) d) at theta = 0 (with definite = true its positive semi-definite part).
+Mat3 mass_offset_hessian(const Vec3& gb, const Vec3& d, double mass, bool definite = false);
+
 }  // namespace corde

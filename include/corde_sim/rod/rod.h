@@ -98,6 +98,21 @@ class Rod {
   // > 0; empty: uniform (the default).
   void set_segment_mass_scale(const std::vector<double>& scale);
   const std::vector<double>& segment_mass_scale() const { return mass_scale_; }
+  // A rigid end body's centre of mass off its end node: `mass` (kg, > 0, also added to the node
+  // with add_node_mass) sits at x_node + R_s offset, offset (m) in the end segment s's material
+  // frame; node is 0 (s = 0) or N (s = N - 1). Its weight then also turns the segment: energy
+  // -mass g.(R_s offset), body torque mass offset x (R_s^T g), in energies, forces, RodSystem and
+  // statics. Inertia stays block-diagonal: add the parallel-axis term to the segment with
+  // add_segment_inertia (docs/scene_format.md, "Cable bodies"). Adds up.
+  struct MassOffset {
+    int node = 0, segment = 0;
+    double mass = 0.0;
+    Vec3 offset = Vec3::Zero();
+  };
+  void add_mass_offset(int node, double mass, const Vec3& offset);
+  const std::vector<MassOffset>& mass_offsets() const { return mass_offsets_; }
+  // The offsets' body torque on segment s under gravity g (zero without offsets there).
+  Vec3 mass_offset_torque(int segment, const Vec3& gravity) const;
   // The added point masses per node and inertias per segment (empty: none).
   const std::vector<double>& added_node_masses() const { return added_mass_; }
   const std::vector<Vec3>& added_segment_inertias() const { return added_inertia_; }
@@ -215,6 +230,7 @@ class Rod {
   // add_node_mass, add_segment_inertia, set_segment_mass_scale: empty until set.
   std::vector<double> added_mass_, mass_scale_;
   std::vector<Vec3> added_inertia_;
+  std::vector<MassOffset> mass_offsets_;  // add_mass_offset
 
   // Constants precomputed from the rest lengths and the section (the step divides by nothing of
   // them), one array each so that the step's loops read unit-stride streams and vectorise.

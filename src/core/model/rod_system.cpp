@@ -1,5 +1,6 @@
 #include "corde_sim/model/rod_system.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -140,8 +141,11 @@ double RodSystem::energy() const {
     if (g1.active)
       e += bend_twist_energy(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, nullptr, nullptr);
   }
-  if (terms & kGravityTerm)
+  if (terms & kGravityTerm) {
     for (int i = 0; i <= n; ++i) e -= r.node_masses()[i] * gravity.dot(x[i]);
+    for (const Rod::MassOffset& m : r.mass_offsets())
+      e -= m.mass * gravity.dot(q[m.segment] * m.offset);
+  }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads())
       if (load_has_potential(l)) e -= load_work(l, load_scale * l.scale(t), x[l.index]);
@@ -189,8 +193,13 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
     if (g0.active) element(g0.frame, q[0], 0.5 * rest[0], g0.uhat, -1, 0);
     if (g1.active) element(q[n - 1], g1.frame, 0.5 * rest[n - 1], g1.uhat, n - 1, -1);
   }
-  if (terms & kGravityTerm)
+  if (terms & kGravityTerm) {
     for (int i = 0; i <= n; ++i) g->segment<3>(node_index(i)) -= r.node_masses()[i] * gravity;
+    // An offset centre of mass (Rod::add_mass_offset): body gradient -m d x (R^T g).
+    for (const Rod::MassOffset& m : r.mass_offsets())
+      g->segment<3>(segment_index(m.segment)) -=
+          m.mass * m.offset.cross(q[m.segment].conjugate() * gravity);
+  }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads()) {
       if (l.follower) continue;
@@ -256,7 +265,22 @@ void RodSystem::hessian(BlockTridiag* h) const {
   h->diag[n].setZero();  // the last node and the unused slot
   h->diag[n].topLeftCorner<3, 3>() = dd_prev;
   // Gravity and dead force loads are linear in the positions; dead torques have a skew torque
-  // Jacobian and no symmetric part: none of them adds to the Hessian.
+  // Jacobian and no symmetric part: none of them adds to the Hessian, but gravity on an offset
+  // centre of mass does: -m gb.(R exp(theta) d), gb = R^T g, has the body Hessian
+  // m (gb.d) I - (m/2)(gb d^T + d gb^T) (its PSD part when definite).
+  if (terms & kGravityTerm)
+    for (const Rod::MassOffset& m : r.mass_offsets())
+      h->diag[m.segment].bottomRightCorner<3, 3>() +=
+          mass_offset_hessian(q[m.segment].conjugate() * gravity, m.offset, m.mass, definite);
+}
+
+Mat3 mass_offset_hessian(const Vec3& gb, const Vec3& d, double mass, bool definite) {
+  Mat3 h =
+      mass * gb.dot(d) * Mat3::Identity() - 0.5 * mass * (gb * d.transpose() + d * gb.transpose());
+  if (!definite) return h;
+  Eigen::SelfAdjointEigenSolver<Mat3> es(h);
+  const Vec3 ev = es.eigenvalues().cwiseMax(0.0);
+  return es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
 }
 
 }  // namespace corde

@@ -96,6 +96,29 @@ void Rod::add_segment_inertia(int segment, const Vec3& inertia) {
   update_mass_and_inertia();
 }
 
+void Rod::add_mass_offset(int node, double mass, const Vec3& offset) {
+  const int n = num_segments();
+  if (node != 0 && node != n)
+    throw std::out_of_range("rod '" + name_ + "': a mass offset needs an end node (0 or " +
+                            std::to_string(n) + "), got " + std::to_string(node));
+  if (!(mass > 0.0) || !std::isfinite(mass) || !offset.allFinite())
+    throw std::invalid_argument("rod '" + name_ +
+                                "': a mass offset needs a finite mass > 0 and a finite offset");
+  MassOffset m;
+  m.node = node;
+  m.segment = node == 0 ? 0 : n - 1;
+  m.mass = mass;
+  m.offset = offset;
+  mass_offsets_.push_back(m);
+}
+
+Vec3 Rod::mass_offset_torque(int segment, const Vec3& gravity) const {
+  Vec3 tau = Vec3::Zero();
+  for (const MassOffset& m : mass_offsets_)
+    if (m.segment == segment) tau += m.mass * m.offset.cross(q_[segment].conjugate() * gravity);
+  return tau;
+}
+
 void Rod::set_segment_mass_scale(const std::vector<double>& scale) {
   if (!scale.empty() && scale.size() != q_.size())
     throw std::invalid_argument("rod '" + name_ +
@@ -643,6 +666,9 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
     else
       tau_[l.index] += load_body_torque(l, scale, q_[l.index]);
   }
+  for (const MassOffset& m : mass_offsets_)
+    if (m.segment >= r.seg0 && m.segment < r.seg1)
+      tau_[m.segment] += m.mass * m.offset.cross(q_[m.segment].conjugate() * gravity);
   if (drag_.active()) drag_block(r.node0, r.node1);
   if (has_external_) {
     for (int i = r.node0; i < r.node1; ++i) f_[i] += ext_f_[i];
@@ -825,6 +851,8 @@ Energies Rod::energies(const Vec3& gravity) const {
     e.kinetic_translation += 0.5 * mass_[i] * v_[i].squaredNorm();
     e.gravity -= mass_[i] * gravity.dot(x_[i]);
   }
+  for (const MassOffset& m : mass_offsets_)
+    e.gravity -= m.mass * gravity.dot(q_[m.segment] * m.offset);
   for (int s = 0; s < n; ++s) {
     const Vec3 dr = x_[s + 1] - x_[s];
     e.kinetic_rotation += 0.5 * w_[s].dot(inertia_[s].cwiseProduct(w_[s]));
@@ -850,6 +878,7 @@ Vec3 Rod::center_of_mass() const {
     c += mass_[i] * x_[i];
     m += mass_[i];
   }
+  for (const MassOffset& mo : mass_offsets_) c += mo.mass * (q_[mo.segment] * mo.offset);
   return c / m;
 }
 

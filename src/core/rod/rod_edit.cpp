@@ -204,6 +204,8 @@ Rod resample_rod(const Rod& rod, int elements) {
   const std::vector<Vec3>& added_inertia = rod.added_segment_inertias();
   for (int s = 0; s < static_cast<int>(added_inertia.size()); ++s)
     if (added_inertia[s] != Vec3::Zero()) out.add_segment_inertia(new_segment(s), added_inertia[s]);
+  for (const Rod::MassOffset& m : rod.mass_offsets())
+    out.add_mass_offset(m.node == 0 ? 0 : elements, m.mass, m.offset);
   if (!rod.segment_mass_scale().empty()) {
     std::vector<double> scale(elements);
     for (int k = 0; k < elements; ++k) {

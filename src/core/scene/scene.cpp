@@ -48,7 +48,7 @@ LoadDescription describe_load(const Value& entry) {
 }
 
 // A `masses` entry: a point mass at a node; at an end node also the rotary inertia of the rigid
-// body it stands for (a plug), across and along the cable's axis.
+// body it stands for (a plug), across and along the cable's axis, and its centre of mass's offset.
 MassDescription describe_mass(const Value& entry) {
   Map m(entry);
   MassDescription d;
@@ -61,6 +61,10 @@ MassDescription describe_mass(const Value& entry) {
           v->in_range(key);
       if (!d.inertia_key) d.inertia_key = v;
     }
+  if (auto v = m.find("offset")) {
+    d.offset = v->vec3(SceneBounds::max_length, "m");
+    d.offset_key = v;
+  }
   m.finish();
   return d;
 }

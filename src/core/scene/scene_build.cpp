@@ -34,14 +34,30 @@ void build_mass(const MassDescription& d, Rod* rod) {
   const int n = rod->num_segments();
   const int node = resolve_index(d.at, n + 1, "node");
   rod->add_node_mass(node, d.mass);
-  if (!d.inertia_key) return;
-  if (node != 0 && node != n)
-    d.inertia_key->fail(
-        "a rotary inertia needs an end node (start or end: the body is fixed to "
-        "the end segment), got node " +
-        std::to_string(node));
-  const double across = d.inertia_across;
-  rod->add_segment_inertia(node == 0 ? 0 : n - 1, Vec3(across, across, d.inertia_along));
+  for (const std::optional<Value>* key : {&d.inertia_key, &d.offset_key})
+    if (*key && node != 0 && node != n)
+      (*key)->fail(std::string(key == &d.inertia_key ? "a rotary inertia" : "an offset") +
+                   " needs an end node (start or end: the body is fixed to the end segment), got "
+                   "node " +
+                   std::to_string(node));
+  double across = d.inertia_across, along = d.inertia_along;
+  if (d.offset_key) {
+    // The centre of mass off the node: at most 10 rod lengths (a longer one is a typo), its
+    // weight's torque on the end segment exact, its inertia about the node by the parallel axis
+    // (the two across terms averaged: the segments are axisymmetric).
+    double length = 0.0;
+    for (double l : rod->rest_lengths()) length += l;
+    if (!(d.offset.norm() <= 10.0 * length))
+      d.offset_key->fail("must be at most 10 times the rod's length (" +
+                         scene_detail::num(10.0 * length) + " m), got a length of " +
+                         scene_detail::num(d.offset.norm()) + " m");
+    const Vec3 o = d.offset;
+    across += d.mass * (0.5 * (o.x() * o.x() + o.y() * o.y()) + o.z() * o.z());
+    along += d.mass * (o.x() * o.x() + o.y() * o.y());
+    if (o != Vec3::Zero()) rod->add_mass_offset(node, d.mass, o);
+  }
+  if (!d.inertia_key && !d.offset_key) return;
+  rod->add_segment_inertia(node == 0 ? 0 : n - 1, Vec3(across, across, along));
 }
 
 // The density ranges as factors on the section's mass per length, each segment taking the mean

@@ -72,6 +72,8 @@ struct MassDescription {
   double mass = 0.0;                                 // kg
   double inertia_across = 0.0, inertia_along = 0.0;  // kg m^2
   std::optional<Value> inertia_key;                  // the first inertia key given
+  Vec3 offset = Vec3::Zero();                        // m, end segment's material frame
+  std::optional<Value> offset_key;                   // `offset`, when given
 };
 
 // A `density_ranges` entry: the density over [from, to] of rest arc length (m).

@@ -250,6 +250,68 @@ TEST(RodSystem, GradientIsMinusTheRodsForcesAndTorques) {
   EXPECT_EQ(grad.segment<3>(6 * rod.num_segments() + 3).norm(), 0.0);  // unused slot
 }
 
+// A rigid end body's centre of mass off its node (Rod::add_mass_offset): gravity's energy
+// -m g.(x_node + R d) has the analytic gradient (against central differences of the energy along
+// the retraction), the analytic Hessian (against differences of the gradient), the rod's torque
+// as minus its body gradient, and the rod's energies' gravity; its definite variant is PSD.
+TEST(RodSystem, MassOffsetGravityMatchesDifferences) {
+  Rod rod = random_rod();
+  const int n = rod.num_segments();
+  rod.add_node_mass(n, 0.2);
+  rod.add_mass_offset(n, 0.2, Vec3(0.01, -0.02, 0.05));
+  rod.add_node_mass(0, 0.1);
+  rod.add_mass_offset(0, 0.1, Vec3(0.0, 0.0, -0.03));
+  const Vec3 g(0.3, -1.0, -9.81);
+  RodSystem sys{&rod, g, 0.0, 1.0, kGravityTerm};
+  Eigen::VectorXd grad;
+  sys.gradient(&grad);
+  // The gradient against fourth-order central differences of the energy.
+  double worst = 0.0;
+  for (int j = 0; j < sys.size(); ++j) {
+    if (j / 6 == n && j % 6 >= 3) continue;
+    const double h = 1e-4;
+    auto energy_at = [&](double s) {
+      Rod r = rod;
+      perturb(&r, j, s);
+      RodSystem rs = sys;
+      rs.rod = &r;
+      return rs.energy();
+    };
+    const double fd =
+        (8.0 * (energy_at(h) - energy_at(-h)) - (energy_at(2 * h) - energy_at(-2 * h))) / (12 * h);
+    worst = std::max(worst, std::abs(fd - grad(j)));
+  }
+  std::cout << "mass offset: worst gradient error " << worst << " of " << grad.norm() << "\n";
+  EXPECT_LT(worst, 1e-9 * grad.norm());
+  // The offsets' torque is there (the test sees it): on the end segments only.
+  EXPECT_GT(grad.segment<3>(RodSystem::segment_index(n - 1)).norm(), 1e-3);
+  EXPECT_GT(grad.segment<3>(RodSystem::segment_index(0)).norm(), 1e-3);
+  EXPECT_EQ(grad.segment<3>(RodSystem::segment_index(2)).norm(), 0.0);
+  // The Hessian against differences of the gradient.
+  BlockTridiag h;
+  sys.hessian(&h);
+  const Eigen::MatrixXd a = h.dense(), fd = fd_hessian(rod, sys);
+  std::cout << "mass offset: Hessian error " << (a - fd).norm() << " of " << a.norm() << "\n";
+  EXPECT_GT(a.norm(), 1e-3);
+  EXPECT_LT((a - fd).norm(), 1e-7 * a.norm());
+  EXPECT_LE((a - a.transpose()).norm(), 1e-14 * a.norm());
+  // The definite variant is positive semi-definite.
+  sys.definite = true;
+  sys.hessian(&h);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h.dense()).eigenvalues().minCoeff(),
+            -1e-12);
+  // The rod's torques are minus the whole gradient, its energies' gravity the term's energy.
+  rod.compute_forces(0.0, g);
+  RodSystem all{&rod, g, 0.0};
+  all.gradient(&grad);
+  double fmax = 0.0;
+  for (const Vec3& f : rod.forces()) fmax = std::max(fmax, f.norm());
+  for (int s = 0; s < n; ++s)
+    EXPECT_LT((grad.segment<3>(6 * s + 3) + rod.torques()[s]).norm(), 1e-12 * fmax)
+        << "segment " << s;
+  EXPECT_NEAR(rod.energies(g).gravity, sys.energy(), 1e-14 * std::abs(sys.energy()));
+}
+
 TEST(RodSystem, RigidMotionsAreInTheNullSpace) {
   // Translations at any state (each term sees only chord differences), exactly up to round-off.
   Rod rod = random_rod();

@@ -62,6 +62,48 @@ TEST(SceneCableBodies, MassErrorsNameTheKey) {
             0u);
 }
 
+// masses[i].offset: the centre of mass off the end node in the end segment's frame; the body's
+// inertia about the node gains the parallel-axis term, its weight turns the end segment.
+TEST(SceneCableBodies, EndBodyOffset) {
+  const Scene s = parse_scene(with_rod_keys(
+      "    masses:\n"
+      "      - {node: end, mass: 0.02, inertia_across: 3.0e-6, offset: [0, 0, 0.05]}\n"));
+  const Scene plain = parse_scene(test::kClampedCable);
+  const Rod& rod = s.world.rods()[0];
+  const Rod& ref = plain.world.rods()[0];
+  ASSERT_EQ(rod.mass_offsets().size(), 1u);
+  EXPECT_EQ(rod.mass_offsets()[0].node, 4);
+  EXPECT_EQ(rod.mass_offsets()[0].segment, 3);
+  EXPECT_EQ(rod.mass_offsets()[0].offset, Vec3(0.0, 0.0, 0.05));
+  const Vec3 added = rod.segment_inertia(3) - ref.segment_inertia(3);
+  EXPECT_NEAR(added.x(), 3e-6 + 0.02 * 0.05 * 0.05, 1e-18);
+  EXPECT_NEAR(added.z(), 0.0, 1e-18);
+  EXPECT_DOUBLE_EQ(rod.node_masses()[4] - ref.node_masses()[4], 0.02);
+  EXPECT_TRUE(ref.mass_offsets().empty());
+  // Under gravity the offset weight turns the end segment (its body torque m d x R^T g).
+  const Vec3 g(0.0, 0.0, -9.81);
+  // The rod lies along x: the offset is horizontal, its arm whole.
+  EXPECT_NEAR(rod.mass_offset_torque(3, g).norm(), 0.02 * 0.05 * 9.81, 1e-12);
+  EXPECT_EQ(rod.mass_offset_torque(2, g), Vec3::Zero());
+}
+
+TEST(SceneCableBodies, OffsetErrorsNameTheKey) {
+  const std::string nan = test::scene_error_of(
+      with_rod_keys("    masses:\n      - {node: end, mass: 0.01, offset: [0, .nan, 0.01]}\n"));
+  EXPECT_EQ(nan.rfind("rods[0].masses[0].offset", 0), 0u) << nan;
+  EXPECT_NE(nan.find("finite"), std::string::npos) << nan;
+  const std::string far = test::scene_error_of(
+      with_rod_keys("    masses:\n      - {node: end, mass: 0.01, offset: [0, 0, 50]}\n"));
+  EXPECT_EQ(far.rfind("rods[0].masses[0].offset: must be at most 10 times the rod's length", 0), 0u)
+      << far;
+  const std::string inner = test::scene_error_of(
+      with_rod_keys("    masses:\n      - {node: 2, mass: 0.01, offset: [0, 0, 0.01]}\n"));
+  EXPECT_EQ(inner.rfind("rods[0].masses[0].offset: an offset needs an end node", 0), 0u) << inner;
+  const std::string shape = test::scene_error_of(
+      with_rod_keys("    masses:\n      - {node: end, mass: 0.01, offset: 0.02}\n"));
+  EXPECT_EQ(shape.rfind("rods[0].masses[0].offset: expected [x, y, z]", 0), 0u) << shape;
+}
+
 TEST(SceneCableBodies, DensityRangesScaleTheSegmentsTheyCover) {
   // 0.2 m in 4 segments of 0.05 m: [0.05, 0.075] covers half of segment 1.
   const Scene s = parse_scene(
