@@ -118,7 +118,7 @@ void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k
 
 double RodSystem::energy() const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();
@@ -140,8 +140,9 @@ double RodSystem::energy() const {
     if (g1.active)
       e += bend_twist_energy(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, nullptr, nullptr);
   }
+  const std::vector<double>& masses = node_masses ? *node_masses : r.node_masses();
   if (terms & kGravityTerm)
-    for (int i = 0; i <= n; ++i) e -= r.node_masses()[i] * gravity.dot(x[i]);
+    for (int i = 0; i <= n; ++i) e -= masses[i] * gravity.dot(x[i]);
   if (terms & kLoadTerm)
     for (const Load& l : r.loads())
       if (load_has_potential(l)) e -= load_work(l, load_scale * l.scale(t), x[l.index]);
@@ -150,7 +151,7 @@ double RodSystem::energy() const {
 
 void RodSystem::gradient(Eigen::VectorXd* g) const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();
@@ -189,8 +190,9 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
     if (g0.active) element(g0.frame, q[0], 0.5 * rest[0], g0.uhat, -1, 0);
     if (g1.active) element(q[n - 1], g1.frame, 0.5 * rest[n - 1], g1.uhat, n - 1, -1);
   }
+  const std::vector<double>& masses = node_masses ? *node_masses : r.node_masses();
   if (terms & kGravityTerm)
-    for (int i = 0; i <= n; ++i) g->segment<3>(node_index(i)) -= r.node_masses()[i] * gravity;
+    for (int i = 0; i <= n; ++i) g->segment<3>(node_index(i)) -= masses[i] * gravity;
   if (terms & kLoadTerm)
     for (const Load& l : r.loads()) {
       if (l.follower) continue;
@@ -205,7 +207,7 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
 
 void RodSystem::hessian(BlockTridiag* h) const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();
