@@ -18,7 +18,7 @@ file(CREATE_LINK ${PROJECT_SOURCE_DIR}/scripts/corde_fit ${PROJECT_BINARY_DIR}/c
 # Recovery of known parameters from synthetic recordings, model mismatch, the command on a rosbag
 # and its messages (label python; the long coverage run: test/python/fit_test.py --long).
 if(CATKIN_ENABLE_TESTING AND TARGET ${PROJECT_NAME}_python AND TARGET corde_run)
-  foreach(_py fit_test fit_cli_test)
+  foreach(_py fit_test fit_cli_test fit_jacobian_test)
     add_test(NAME python_${_py}
       COMMAND ${PYTHON_EXECUTABLE} ${PROJECT_SOURCE_DIR}/test/python/${_py}.py
       WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})

@@ -171,6 +171,22 @@ class Simulation:
         t = self._core.statics_time if time is None else float(time)
         return self._core.statics(t, bool(check))
 
+    def statics_sensitivity(self, params=("E", "G", "rho"), rod=0, rotations=False):
+        """How the equilibrium of the last statics() moves with material keys: a dict parameter
+        -> (N+1, 3) array of d(node position)/dp (m per unit of p: per Pa for E and G, per kg/m^3
+        for rho), from the equilibrium's Hessian (dx/dp = -H^-1 dg/dp, docs/python.md), not by
+        re-solving. Parameters: the material keys E, G, E_s, B, C, K_s, kappa, rho (or density);
+        each moves the section constants the scene derived from it (E: bending, and stretch
+        unless E_s or K_s is given; G: twist and a default kappa; rho: the cable's own weight,
+        not its point masses). rotations=True also returns a dict of (N, 3) body rotations per
+        unit of p (dq/dp = q (x) (0, w)/2). Raises StaticsError when no equilibrium was solved
+        (or the state changed since), SceneError for an unknown parameter or one the rod's
+        material does not derive anything from."""
+        if isinstance(params, str):
+            params = [params]
+        pos, rot = self._core.statics_sensitivity(_rod_arg(rod), [str(p) for p in params])
+        return (pos, rot) if rotations else pos
+
     def check(self):
         """"" when the state passes the runaway checks, else the problem (corde_run checks the
         scene's start so)."""

@@ -6,7 +6,9 @@ scene keys (E, G, damping_time, drag, ...) whose simulation reproduces the track
 nonlinear least squares (scipy.optimize.least_squares) over the logarithms of the parameters,
 residuals = simulated minus tracked positions at the recorded times. The Jacobian is taken by
 forward finite differences; its columns are independent runs, spread over Dask workers when a
-cluster is given. Confidence intervals come from J^T J and the residual variance; a parameter
+cluster is given. In a statics fit the columns of material keys the library differentiates (E, G,
+rho, ...) come from the equilibrium's Hessian instead, in the same solve as the residual
+(fit_jacobian). Confidence intervals come from J^T J and the residual variance; a parameter
 whose interval is wider than a limit (or that does not change the simulation at all) is refused
 as undetermined, fixed at its starting value, and the others are fitted again without it.
 """
@@ -30,6 +32,7 @@ from .fit_recording import (FitError, Recording, ToolChain, grasp_segment,  # no
                             write_bag_recording, write_csv_recording, write_keyframe_csv)
 from .fit_wrench import (FORCE_NOISE, TORQUE_NOISE, WrenchSpec, frame_errors,  # noqa: F401
                          simulate_with_wrench, synthesize_wrenches, wrench_spec)
+from .fit_jacobian import analytic_columns, marker_job_with_sensitivity, parameter_values
 from .fit_sim import (Job, find_corde_run, get_key, load_scene_yaml, markers,  # noqa: F401
                       node_arc_lengths, project_arc_lengths, refine_arc_lengths, rod_length,
                       set_key, simulate,
@@ -184,7 +187,8 @@ class Problem:
 
     def __init__(self, scene, rec: Recording, params: List[Parameter], rod: str,
                  overrides: Dict[str, object], backend="auto", corde_run=None, executor=None,
-                 scale=1e-3, diff_step=1e-3, statics=False, wrench: WrenchSpec = None):
+                 scale=1e-3, diff_step=1e-3, statics=False, wrench: WrenchSpec = None,
+                 jacobian="auto"):
         self.scene, self.rec, self.params, self.rod = scene, rec, params, rod
         self.statics = statics
         self.fixed = dict(overrides)
@@ -195,6 +199,10 @@ class Problem:
         self.runs = 0
         self.s = rec.arc_lengths
         self._cache = {}
+        # columns from the library's statics sensitivity (fit_jacobian), and their cache
+        # (positions only: with measured wrenches every column is a finite difference)
+        self.columns = analytic_columns(params, rod, statics, jacobian if wrench is None else "fd")
+        self._dcache = {}
 
     def job(self, theta) -> Job:
         ov = dict(self.fixed)
@@ -212,7 +220,15 @@ class Problem:
 
     def residuals_many(self, thetas):
         todo = [t for t in thetas if tuple(t) not in self._cache]
-        if todo:
+        if todo and self.columns:
+            results = self.executor.map(
+                marker_job_with_sensitivity,
+                [(self.job(t), self.s, parameter_values(t, self.columns)) for t in todo])
+            self.runs += len(todo)
+            for t, (pts, dpts) in zip(todo, results):
+                self._cache[tuple(t)] = self._residuals_of(pts)
+                self._dcache[tuple(t)] = dpts.reshape(len(dpts), -1) / self.scale
+        elif todo:
             if self.wrench is not None:
                 results = self.executor.map(_marker_wrench_job,
                                             [(self.job(t), self.s, self.wrench) for t in todo])
@@ -229,12 +245,18 @@ class Problem:
     def jacobian(self, theta):
         theta = np.asarray(theta, float)
         pts = [theta.copy()]
-        for j in range(len(theta)):
+        fd = [j for j in range(len(theta)) if j not in self.columns]
+        for j in fd:
             t = theta.copy()
             t[j] += self.h
             pts.append(t)
         r = self.residuals_many(pts)
-        return np.stack([(r[j + 1] - r[0]) / self.h for j in range(len(theta))], axis=1)
+        J = np.empty((len(r[0]), len(theta)))
+        for k, j in enumerate(fd):
+            J[:, j] = (r[k + 1] - r[0]) / self.h
+        for k, j in enumerate(sorted(self.columns)):
+            J[:, j] = self._dcache[tuple(theta)][k]
+        return J
 
 
 def _covariance(J, r, dof):
@@ -254,13 +276,17 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
         corde_run: Optional[str] = None, executor=None, confidence: float = 0.95,
         max_ci_factor: float = 2.0, max_iterations: int = 30, diff_step: float = 1e-3,
         log: Callable[[str], None] = lambda s: None, statics: bool = False,
-        wrench: Optional[WrenchSpec] = None, tracking_noise: float = 1e-3) -> FitResult:
+        wrench: Optional[WrenchSpec] = None, tracking_noise: float = 1e-3,
+        jacobian: str = "auto") -> FitResult:
     """Fits params to the recording (arc lengths given, or projected onto the rod at the first
     frame with the starting parameters). statics: every frame is the cable at rest, compared
     with the static equilibrium at its time (the drives and grasps where they are then), not
-    with a run. wrench: the gripper's measured wrenches (fit_wrench.wrench_spec), compared with
-    the simulated grasp reaction, each residual divided by its noise (the points' by
-    tracking_noise, m). Parameters whose confidence interval spans more than a
+    with a run; there, jacobian='auto' takes the columns of the material keys the library
+    differentiates from the equilibrium's Hessian ('fd': finite differences for all; always
+    with wrench, whose reactions have no analytic derivative yet). wrench: the gripper's
+    measured wrenches (fit_wrench.wrench_spec), compared with the simulated grasp reaction,
+    each residual divided by its noise (the points' by tracking_noise, m). Parameters whose
+    confidence interval spans more than a
     factor max_ci_factor either way (or that the residuals do not depend on) are refused as
     undetermined and kept at their starting value; the others are fitted again without them."""
     from scipy import optimize, stats
@@ -293,7 +319,8 @@ def fit(scene: str, rec: Recording, params: List[Parameter], rod: str = "0",
             prob = Problem(scene, rec, active, rod,
                            {**overrides, **{p.key: p.initial for p in params if p not in active}},
                            backend, corde_run, executor, scale=tracking_noise,
-                           diff_step=diff_step, statics=statics, wrench=wrench)
+                           diff_step=diff_step, statics=statics, wrench=wrench,
+                           jacobian=jacobian)
             x0 = np.log([values[p.name] for p in active])
             # parameters the recording does not depend on at all: refused before fitting
             J0 = prob.jacobian(x0)

@@ -228,6 +228,9 @@ def main(argv=None) -> int:
         ap.add_argument("--statics", action="store_true",
                         help="every frame is the cable at rest: compare with the static "
                              "equilibrium at its time instead of a run")
+        ap.add_argument("--jacobian", choices=["auto", "fd"], default="auto",
+                        help="statics fits: material keys' columns from the equilibrium's "
+                             "Hessian (auto) or all by finite differences (fd)")
         ap.add_argument("--workers", type=int, default=0,
                         help="Dask local cluster of this many workers (0 or 1: serial)")
         ap.add_argument("--scheduler", default=None, help="Dask scheduler address")
@@ -305,7 +308,8 @@ def _main_fit(a) -> int:
         try:
             res = fit(a.scene, rec, params, rod, ov, a.backend, a.corde_run, executor,
                       a.confidence, a.max_ci_factor, a.max_iterations, log=log,
-                      statics=a.statics, wrench=wspec, tracking_noise=a.tracking_noise)
+                      statics=a.statics, wrench=wspec, tracking_noise=a.tracking_noise,
+                      jacobian=a.jacobian)
         finally:
             executor.close()
     finally:

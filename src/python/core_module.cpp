@@ -49,6 +49,13 @@ const corde::Rod& rod_of(const SceneSimulation& s, const py::object& rod) {
   return s.rod(rod.cast<int>());
 }
 
+int rod_index_of(const SceneSimulation& s, const py::object& rod) {
+  if (py::isinstance<py::str>(rod)) return s.rod_index(rod.cast<std::string>());
+  const int index = rod.cast<int>();
+  s.rod(index);  // throws for one out of range
+  return index;
+}
+
 py::dict guard_event_dict(const corde::GuardEvent& e) {
   static const char* actions[] = {"none", "halve_step", "implicit", "give_up", "restore"};
   py::dict d;
@@ -205,6 +212,23 @@ PYBIND11_MODULE(_core, m) {
             return equilibrium_dict(eq, s.statics_summary(eq));
           },
           py::arg("time"), py::arg("check"))
+      .def(
+          "statics_sensitivity",
+          [](SceneSimulation& s, const py::object& rod, const std::vector<std::string>& params) {
+            std::vector<corde::StaticSensitivity> d;
+            const int index = rod_index_of(s, rod);
+            {
+              py::gil_scoped_release release;
+              d = s.statics_sensitivity(index, params);
+            }
+            py::dict positions, rotations;
+            for (size_t j = 0; j < params.size(); ++j) {
+              positions[py::str(params[j])] = vec3_rows(d[j].positions);
+              rotations[py::str(params[j])] = vec3_rows(d[j].rotations);
+            }
+            return py::make_tuple(positions, rotations);
+          },
+          py::arg("rod"), py::arg("parameters"))
       .def_property_readonly("time", [](const SceneSimulation& s) { return s.world().time(); })
       .def_property_readonly("time_step",
                              [](const SceneSimulation& s) { return s.world().time_step; })

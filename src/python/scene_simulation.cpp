@@ -107,7 +107,37 @@ SceneEquilibrium SceneSimulation::statics(double t) {
     throw SceneError(scene_error_message(scene_->source, e.what()));
   }
   sim_.restart_guard();
+  equilibrium_ = eq.ok;
+  equilibrium_time_ = t;
+  equilibrium_x_.clear();
+  equilibrium_q_.clear();
+  for (const Rod& r : scene_->world.rods()) {
+    equilibrium_x_.push_back(r.positions());
+    equilibrium_q_.push_back(r.orientations());
+  }
   return eq;
+}
+
+std::vector<StaticSensitivity> SceneSimulation::statics_sensitivity(
+    int index, const std::vector<std::string>& parameters) {
+  const Rod& r = rod(index);
+  if (index < 0) index += static_cast<int>(scene_->world.rods().size());
+  bool same = equilibrium_;
+  for (size_t i = 0; same && i < equilibrium_x_.size(); ++i) {
+    const Rod& ri = scene_->world.rods()[i];
+    same = ri.positions() == equilibrium_x_[i];
+    for (size_t s = 0; same && s < equilibrium_q_[i].size(); ++s)
+      same = ri.orientations()[s].coeffs() == equilibrium_q_[i][s].coeffs();
+  }
+  if (!same)
+    throw StaticsFailure(
+        "statics sensitivity: no static equilibrium to differentiate: call statics() first (and "
+        "after any step: the sensitivity is that of the equilibrium the rods are at)");
+  try {
+    return scene_statics_sensitivity(scene_.get(), r.name(), equilibrium_time_, parameters);
+  } catch (const SceneError& e) {
+    throw SceneError(scene_error_message(scene_->source, e.what()));
+  }
 }
 
 std::string SceneSimulation::statics_summary(const SceneEquilibrium& eq) const {

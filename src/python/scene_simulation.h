@@ -58,6 +58,11 @@ class SceneSimulation {
   // leaves the rods at the last iterate (the caller throws StaticsFailure).
   SceneEquilibrium statics(double t);
   std::string statics_summary(const SceneEquilibrium& eq) const;
+  // The sensitivity of rod `rod`'s equilibrium to material keys (scene_statics_sensitivity) at
+  // the last converged statics(). Throws StaticsFailure when none was solved, or the state has
+  // changed since (a step, another solve that failed); SceneError for a bad parameter.
+  std::vector<StaticSensitivity> statics_sensitivity(int rod,
+                                                     const std::vector<std::string>& parameters);
 
   const Scene& scene() const { return *scene_; }
   const World& world() const { return scene_->world; }
@@ -82,6 +87,11 @@ class SceneSimulation {
   std::vector<GuardEvent> guard_events_;
   std::vector<SimulationEvent> events_;
   long steps_ = 0;
+  // The last converged equilibrium: its time and every rod's node positions and frames then.
+  bool equilibrium_ = false;
+  double equilibrium_time_ = 0.0;
+  std::vector<std::vector<Vec3>> equilibrium_x_;
+  std::vector<std::vector<Quat>> equilibrium_q_;
 };
 
 }  // namespace corde::python

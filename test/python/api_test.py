@@ -149,6 +149,56 @@ class Pendulum(unittest.TestCase):
         np.testing.assert_array_equal(a.frames(), b.frames())
 
 
+CANTILEVER = """gravity: [0, 0, -9.81]
+rods:
+  - name: cable
+    elements: 16
+    radius: 0.004
+    material: {E: 2.0e7, G: 7.0e6, rho: 1500}
+    shape: {type: straight, start: [0, 0, 1], direction: [1, 0, 0], length: 0.4}
+    boundary:
+      - {clamp: start, kind: ghost}
+    masses:
+      - {node: end, mass: 0.005}
+"""
+
+
+class StaticsSensitivity(unittest.TestCase):
+    """Simulation.statics_sensitivity against central differences of re-solved equilibria."""
+
+    def test_matches_differences(self):
+        sim = corde_sim.parse(CANTILEVER)
+        sim.statics()
+        d, w = sim.statics_sensitivity(["E", "G", "density"], rod="cable", rotations=True)
+        self.assertEqual(sorted(d), ["E", "G", "density"])
+        self.assertEqual(d["E"].shape, (17, 3))
+        self.assertEqual(w["G"].shape, (16, 3))
+        for name, key, value in (("E", "E", 2.0e7), ("G", "G", 7.0e6), ("density", "rho", 1500)):
+            h = 1e-4 * value
+            x = []
+            for v in (value + h, value - h):
+                s = corde_sim.parse(CANTILEVER, {f"rods.0.material.{key}": v})
+                s.statics()
+                x.append(s.positions(0))
+            fd = (x[0] - x[1]) / (2 * h)
+            err = np.abs(d[name] - fd).max() / np.abs(fd).max()
+            print(f"statics_sensitivity {name}: {err:.2e} relative to central differences")
+            self.assertLess(err, 1e-5, name)
+
+    def test_errors(self):
+        sim = corde_sim.parse(CANTILEVER)
+        with self.assertRaisesRegex(corde_sim.StaticsError, "call statics\\(\\) first"):
+            sim.statics_sensitivity(["E"])
+        sim.statics()
+        with self.assertRaisesRegex(corde_sim.SceneError, "unknown parameter 'Q'"):
+            sim.statics_sensitivity(["Q"])
+        with self.assertRaisesRegex(corde_sim.SceneError, "derives nothing from C"):
+            sim.statics_sensitivity(["C"])
+        sim.step(1)
+        with self.assertRaisesRegex(corde_sim.StaticsError, "no static equilibrium"):
+            sim.statics_sensitivity(["E"])
+
+
 class BadInput(unittest.TestCase):
     """Errors raise corde_sim exceptions with corde_run's messages."""
 

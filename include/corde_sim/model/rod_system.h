@@ -52,6 +52,12 @@ struct RodSystem {
   // order cross terms lower the twist curvature by about l kappa gamma^2 / 4 (gamma the shear
   // angle), more than the twist stiffness C/l for a steel wire at gamma of a few 0.01 rad.
   bool definite = false;
+  // Stand-ins for the rod's section and node masses (null: the rod's own). Every term is linear in
+  // its constant (B, C, K_s, kappa, the node masses), so the gradient with the constants' rates
+  // d/dp in their place is d(gradient)/dp: how statics' sensitivity (statics/static_sensitivity.h)
+  // gets it without differencing.
+  const Section* section = nullptr;
+  const std::vector<double>* node_masses = nullptr;
 
   int blocks() const { return rod->num_nodes(); }
   int size() const { return 6 * blocks(); }

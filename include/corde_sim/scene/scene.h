@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "corde_sim/grasp/grasp.h"
@@ -37,6 +38,16 @@ struct SceneLimits {
   static constexpr double max_length = 1.0e4;               // m: any size, position or extent
 };
 
+// Which material key each of a rod's section constants is proportional to, as the scene derived
+// them (docs/scene_format.md, the material map): "E", "G", "E_s", "B", "C", "K_s", "kappa", "rho";
+// "" for none (the mass with density ranges, which keep their own densities). With nu, the twist
+// and a default kappa follow E. statics' sensitivity (statics/scene_statics.h) reads it.
+struct MaterialOrigin {
+  std::string bend = "E", twist = "G", stretch = "E", kappa = "G", mass = "rho";
+  // The keys' values (Pa, N m^2, N or kg/m^3) the section was derived from, by key.
+  std::vector<std::pair<std::string, double>> values;
+};
+
 struct Scene {
   World world;            // rods built, drives/loads applied, gravity, time step
   double duration = 1.0;  // s
@@ -59,6 +70,8 @@ struct Scene {
   // Choices the loader made for the scene and why (elements: auto, integrator: auto, time_step:
   // auto), one line each, for corde_run's summary and the node's log.
   std::vector<std::string> notes;
+  // Per rod of world.rods(), how its section follows the material keys.
+  std::vector<MaterialOrigin> materials;
 };
 
 // Parses and validates a scene. `overrides` are "key.path=value" strings (e.g.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "corde_sim/scene/scene.h"
+#include "corde_sim/statics/static_sensitivity.h"
 #include "corde_sim/statics/statics.h"
 
 namespace corde {
@@ -60,6 +61,22 @@ SceneEquilibrium solve_scene_statics(Scene* scene, double t, const StaticOptions
 // from zero: none), so that the run starts in equilibrium; its drives are left as they were. Throws
 // SceneError when statics cannot handle the rod or does not converge.
 RodEquilibrium settle_rod(Scene* scene, Rod* rod);
+
+// The material parameters statics_sensitivity() knows: E, G, E_s, B, C, K_s, kappa and rho
+// (density an alias of rho), the scene's material keys.
+const std::vector<std::string>& sensitivity_parameters();
+
+// The sensitivity of rod `rod`'s equilibrium at time t to the material keys `parameters`
+// (static_sensitivity.h): per parameter d(node positions)/dp and the segments' body rotations per
+// unit of p. The rod must be at the equilibrium solve_scene_statics(scene, t) left (not checked);
+// loads that have started act whole and gravity at its full value, as that solve put them. A key
+// changes the section constants the scene derived from it (Scene::materials): E bending and, unless
+// E_s or K_s is given, stretch (and with nu twist and a default kappa); G twist and a default
+// kappa (G A); rho the rod's distributed mass (point masses stay). Throws SceneError for an
+// unknown rod or parameter, a key the rod's material does not derive anything from (e.g. E where
+// it gives B), rho with density ranges, or a singular Hessian.
+std::vector<StaticSensitivity> scene_statics_sensitivity(
+    Scene* scene, const std::string& rod, double t, const std::vector<std::string>& parameters);
 
 // Multiline report: per rod converged or not, residual, Newton iterations, load steps, stability,
 // lowest node and sag; per support its force and moment.

@@ -119,7 +119,7 @@ void bend_twist_hessian(const Quat& a, const Quat& b, double rest, const Vec3& k
 
 double RodSystem::energy() const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();
@@ -141,10 +141,13 @@ double RodSystem::energy() const {
     if (g1.active)
       e += bend_twist_energy(q[n - 1], g1.frame, 0.5 * rest[n - 1], k, g1.uhat, nullptr, nullptr);
   }
+  const std::vector<double>& masses = node_masses ? *node_masses : r.node_masses();
   if (terms & kGravityTerm) {
-    for (int i = 0; i <= n; ++i) e -= r.node_masses()[i] * gravity.dot(x[i]);
-    for (const Rod::MassOffset& m : r.mass_offsets())
-      e -= m.mass * gravity.dot(q[m.segment] * m.offset);
+    for (int i = 0; i <= n; ++i) e -= masses[i] * gravity.dot(x[i]);
+    // Offset centres of mass are point masses: no stand-in rate moves them.
+    if (!node_masses)
+      for (const Rod::MassOffset& m : r.mass_offsets())
+        e -= m.mass * gravity.dot(q[m.segment] * m.offset);
   }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads())
@@ -154,7 +157,7 @@ double RodSystem::energy() const {
 
 void RodSystem::gradient(Eigen::VectorXd* g) const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();
@@ -193,12 +196,15 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
     if (g0.active) element(g0.frame, q[0], 0.5 * rest[0], g0.uhat, -1, 0);
     if (g1.active) element(q[n - 1], g1.frame, 0.5 * rest[n - 1], g1.uhat, n - 1, -1);
   }
+  const std::vector<double>& masses = node_masses ? *node_masses : r.node_masses();
   if (terms & kGravityTerm) {
-    for (int i = 0; i <= n; ++i) g->segment<3>(node_index(i)) -= r.node_masses()[i] * gravity;
-    // An offset centre of mass (Rod::add_mass_offset): body gradient -m d x (R^T g).
-    for (const Rod::MassOffset& m : r.mass_offsets())
-      g->segment<3>(segment_index(m.segment)) -=
-          m.mass * m.offset.cross(q[m.segment].conjugate() * gravity);
+    for (int i = 0; i <= n; ++i) g->segment<3>(node_index(i)) -= masses[i] * gravity;
+    // An offset centre of mass (Rod::add_mass_offset): body gradient -m d x (R^T g); a point
+    // mass, so no stand-in rate moves it.
+    if (!node_masses)
+      for (const Rod::MassOffset& m : r.mass_offsets())
+        g->segment<3>(segment_index(m.segment)) -=
+            m.mass * m.offset.cross(q[m.segment].conjugate() * gravity);
   }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads()) {
@@ -214,7 +220,7 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
 
 void RodSystem::hessian(BlockTridiag* h) const {
   const Rod& r = *rod;
-  const Section& sec = r.section();
+  const Section& sec = section ? *section : r.section();
   const auto& x = r.positions();
   const auto& q = r.orientations();
   const auto& rest = r.rest_lengths();

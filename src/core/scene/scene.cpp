@@ -117,6 +117,7 @@ RodDescription describe_rod(const Value& v, int index, const std::vector<RodDesc
   if (total > SceneLimits::max_total_elements) fail_total(*r.elements_key, total);
   MaterialExtras extras;
   spec.section = read_section(&m, base, &extras);
+  r.origin = extras.origin;
   r.shape_key = m.get("shape");
   spec.shape = read_shape(*r.shape_key);
   if (auto p = m.find("reference_d1")) spec.shape.reference_d1 = p->nonzero_vec3();

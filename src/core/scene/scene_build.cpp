@@ -141,6 +141,8 @@ void build_rod_entry(const RodDescription& r, Scene* scene, std::vector<RodEntry
   }
   for (const LoadDescription& l : r.loads) build_load(l, rod, &scene->warnings);
   build_density(r.density_ranges, r.spec.section, rod);
+  scene->materials.push_back(r.origin);
+  if (!r.density_ranges.empty()) scene->materials.back().mass = "";
   for (const MassDescription& m : r.masses) build_mass(m, rod);
   // After the supports: `auto` reads the stability limits of the rod as it is held.
   if (r.inertia_scale_auto)

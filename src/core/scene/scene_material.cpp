@@ -271,6 +271,19 @@ Section read_section(Map* rod, const std::string& base, MaterialExtras* extras) 
   mat.gamma_t = gamma_t ? *gamma_t : (tau ? *tau : tau_t) * mat.stretch_stiffness;
   mat.gamma_r = gamma_r ? *gamma_r : (tau ? *tau : tau_r) * mat.bend_stiffness;
   mat.max_strain = max_strain ? *max_strain : preset ? preset->material.max_strain : 0.0;
+  if (extras) {
+    MaterialOrigin& o = extras->origin;
+    o.bend = B ? "B" : "E";
+    o.twist = C ? "C" : k.nu ? "E" : "G";
+    o.stretch = Ks ? "K_s" : Es ? "E_s" : "E";
+    o.kappa = kappa ? "kappa" : o.twist;
+    o.mass = "rho";
+    o.values.clear();
+    for (auto [key, v] : {std::pair{"E", E}, std::pair{"G", G}, std::pair{"E_s", Es},
+                          std::pair{"B", B}, std::pair{"C", C}, std::pair{"K_s", Ks},
+                          std::pair{"kappa", kappa}, std::pair{"rho", rho}})
+      if (v) o.values.emplace_back(key, *v);
+  }
   if (file && extras) {
     extras->file = file->path;
     extras->friction = file->friction;

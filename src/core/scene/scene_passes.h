@@ -129,6 +129,7 @@ struct RodDescription {
   std::vector<LoadDescription> loads;
   std::vector<MassDescription> masses;
   std::vector<DensityRange> density_ranges;
+  MaterialOrigin origin;  // which key each section constant follows (read_section)
   // rotational_inertia_scale: a number, or auto (computed on the built rod, noted under its key).
   std::optional<double> inertia_scale;
   std::optional<std::string> inertia_scale_auto;  // the key's path

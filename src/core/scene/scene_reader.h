@@ -104,6 +104,7 @@ struct MaterialExtras {
   std::string file;  // the material file read ("": none)
   std::optional<Drag> drag;
   std::optional<double> friction;
+  MaterialOrigin origin;  // which key each section constant follows
 };
 
 // The section of rods[i] from its `material` and `radius` keys (scene_material.cpp): a preset, a

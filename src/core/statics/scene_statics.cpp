@@ -269,6 +269,77 @@ RodEquilibrium settle_rod(Scene* scene, Rod* rod) {
   return e;
 }
 
+const std::vector<std::string>& sensitivity_parameters() {
+  static const std::vector<std::string> names{"E", "G", "E_s", "B", "C", "K_s", "kappa", "rho"};
+  return names;
+}
+
+std::vector<StaticSensitivity> scene_statics_sensitivity(
+    Scene* scene, const std::string& rod, double t, const std::vector<std::string>& parameters) {
+  World& world = scene->world;
+  int index = -1;
+  std::string names;
+  for (size_t i = 0; i < world.rods().size(); ++i) {
+    if (world.rods()[i].name() == rod) index = static_cast<int>(i);
+    names += (i ? ", " : "") + world.rods()[i].name();
+  }
+  if (index < 0)
+    throw SceneError("statics sensitivity: no rod named '" + rod + "' (rods: " + names + ")");
+  if (index >= static_cast<int>(scene->materials.size()))
+    throw SceneError("statics sensitivity: rod '" + rod +
+                     "' was not built from a scene's material map: which keys its section "
+                     "follows is not known");
+  Rod& r = world.rods()[index];
+  const MaterialOrigin& o = scene->materials[index];
+  const Section& sec = r.section();
+  std::vector<SectionRate> rates;
+  for (const std::string& given : parameters) {
+    const std::string p = given == "density" ? "rho" : given;
+    const std::vector<std::string>& known = sensitivity_parameters();
+    if (std::find(known.begin(), known.end(), p) == known.end()) {
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw SceneError("statics sensitivity: unknown parameter '" + given + "' (known: " + list +
+                       ", density)");
+    }
+    double value = 0.0;
+    for (const auto& [key, v] : o.values)
+      if (key == p) value = v;
+    SectionRate rate;
+    if (value > 0.0) {
+      if (o.bend == p) rate.bend = sec.bend / value;
+      if (o.twist == p) rate.twist = sec.twist / value;
+      if (o.stretch == p) rate.stretch = sec.stretch / value;
+      if (o.kappa == p) rate.kappa = sec.kappa / value;
+      if (o.mass == p) rate.mass_per_length = sec.mass_per_length / value;
+    }
+    if (rate.bend == 0.0 && rate.twist == 0.0 && rate.stretch == 0.0 && rate.kappa == 0.0 &&
+        rate.mass_per_length == 0.0) {
+      const std::string why =
+          p == "rho" && value > 0.0
+              ? "its density ranges give parts of it their own density, so its mass is not "
+                "proportional to rho"
+              : "its material derives nothing from " + p + " (bending from " + o.bend +
+                    ", twist from " + o.twist + ", stretch from " + o.stretch + ", kappa from " +
+                    o.kappa + ")";
+      throw SceneError("statics sensitivity: rod '" + rod + "': parameter '" + given + "': " + why);
+    }
+    rates.push_back(rate);
+  }
+  // The loads as the solve had them: those that have started act whole.
+  const std::vector<Load> loads = r.loads();
+  for (Load& l : r.loads())
+    if (l.t_start <= t) l.ramp_time = 0.0;
+  try {
+    std::vector<StaticSensitivity> out = static_sensitivity(r, world.gravity, t, rates);
+    r.loads() = loads;
+    return out;
+  } catch (const std::exception& e) {
+    r.loads() = loads;
+    throw SceneError(e.what());
+  }
+}
+
 std::string statics_summary(const Scene& scene, const SceneEquilibrium& eq) {
   char buf[512];
   std::string out = scene_header(scene);

@@ -13,6 +13,7 @@
 #include "corde_sim/model/loads.h"
 #include "corde_sim/model/rod_system.h"
 #include "corde_sim/statics/static_hessian.h"
+#include "corde_sim/statics/static_sensitivity.h"
 
 namespace corde {
 namespace {
@@ -351,6 +352,70 @@ class Problem {
     for (int i = 0; i < ndof_; ++i) (*r)(i) = b(full_[i]);
   }
   int block_index(int i) const { return full_[i]; }
+
+  // dy/dp = -A^-1 T^T dg/dp for each rate (A the system matrix, T the map from the scaled unknowns
+  // to displacements and body rotations, basis_block), mapped back by T. dg/dp: the gradient of
+  // the elastic and gravity terms with the rates in place of the section constants and of the
+  // nodes' section masses.
+  std::vector<StaticSensitivity> sensitivity(const std::vector<SectionRate>& rates) {
+    const int nb = rod_.num_nodes();
+    BlockTridiag a;
+    system_matrix(&a);
+    const bool torques = has_dead_torques();
+    if (torques) add_torque_jacobian(&a);
+    double diag = 0.0;
+    for (int i = 0; i < ndof_; ++i)
+      diag = std::max(diag, std::abs(a.diag[full_[i] / 6](full_[i] % 6, full_[i] % 6)));
+    BlockTridiagSolver chol;
+    BlockTridiagLU lu;
+    const bool use_chol = !torques && chol.factor(a, 1e-13 * diag);
+    if (!use_chol && !lu.factor(a))
+      throw std::runtime_error("statics sensitivity: rod '" + rod_.name() +
+                               "': the equilibrium's Hessian is singular (a free rigid motion or "
+                               "a neutral direction): the equilibrium does not depend on the "
+                               "material uniquely");
+    const Section& sec = rod_.section();
+    std::vector<double> masses(nb, 0.0);
+    std::vector<StaticSensitivity> out;
+    Eigen::VectorXd g, b(6 * nb);
+    std::vector<Mat6> t(nb);
+    for (int k = 0; k < nb; ++k) basis_block(k, &t[k]);
+    for (const SectionRate& rate : rates) {
+      Section ds = sec;
+      ds.bend = rate.bend;
+      ds.twist = rate.twist;
+      ds.stretch = rate.stretch;
+      ds.kappa = rate.kappa;
+      const double mscale =
+          sec.mass_per_length > 0.0 ? rate.mass_per_length / sec.mass_per_length : 0.0;
+      const std::vector<double>& added = rod_.added_node_masses();
+      for (int i = 0; i < nb; ++i)
+        masses[i] = mscale * (rod_.node_masses()[i] - (added.empty() ? 0.0 : added[i]));
+      RodSystem sys{&rod_, gravity_, t_, 1.0,
+                    kStretchTerm | kCouplingTerm | kBendTwistTerm | kGravityTerm};
+      sys.section = &ds;
+      sys.node_masses = &masses;
+      sys.gradient(&g);
+      for (int k = 0; k < nb; ++k) b.segment<6>(6 * k) = -(t[k].transpose() * g.segment<6>(6 * k));
+      Eigen::VectorXd r;
+      from_blocks(b, &r);
+      to_blocks(r, &b);  // zero on the held and unused slots
+      if (use_chol)
+        chol.solve(&b);
+      else
+        lu.solve(&b);
+      StaticSensitivity sv;
+      sv.positions.assign(nb, Vec3::Zero());
+      sv.rotations.assign(rod_.num_segments(), Vec3::Zero());
+      for (int k = 0; k < nb; ++k) {
+        const Vec6 d = t[k] * b.segment<6>(6 * k);
+        sv.positions[k] = d.head<3>();
+        if (k < rod_.num_segments()) sv.rotations[k] = d.tail<3>();
+      }
+      out.push_back(std::move(sv));
+    }
+    return out;
+  }
 
   // Symmetrised central-difference Jacobian of minus the residual, by colours. Second order
   // (30 force evaluations) for Newton; fourth order (60) where the Hessian itself is the result:
@@ -755,6 +820,13 @@ Eigen::SparseMatrix<double> static_hessian(Rod& rod, const Vec3& gravity, double
   Eigen::SparseMatrix<double> h(n, n);
   h.setFromTriplets(trip.begin(), trip.end());
   return h;
+}
+
+std::vector<StaticSensitivity> static_sensitivity(Rod& rod, const Vec3& gravity, double t,
+                                                  const std::vector<SectionRate>& rates,
+                                                  const StaticOptions& options) {
+  Problem pb(rod, gravity, t, options);
+  return pb.sensitivity(rates);
 }
 
 }  // namespace corde
