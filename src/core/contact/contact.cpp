@@ -228,12 +228,31 @@ void ContactSystem::redetect(World& world, double h, const ContactResponse&) {
   for (size_t r = 0; r < velocity_.size(); ++r)
     for (size_t i = 0; i < velocity_[r].size() && i < detected_v_[r].size(); ++i)
       if (detected_v_[r][i].norm() > velocity_[r][i].norm()) velocity_[r][i] = detected_v_[r][i];
-  // Rod pairs only: the obstacles' contacts (and the bounds of those with moving obstacles, taken
-  // from the velocities detection used) stay as they are.
-  contacts_.erase(std::remove_if(contacts_.begin(), contacts_.end(),
-                                 [](const Contact& c) { return c.rod_b >= 0; }),
-                  contacts_.end());
+  // Rod pairs only, and only added: the contacts found so far (the obstacles' with the bounds of
+  // those with moving obstacles, the rod pairs with their relinearisation) stay as they are, and a
+  // pair found again is dropped (redetecting them from the step's start undid the passes' work).
+  const int kept = static_cast<int>(contacts_.size());
   detect_rod_pairs(world, h);
+  which_.clear();
+  for (int k = 0; k < static_cast<int>(contacts_.size()); ++k)
+    if (contacts_[k].rod_b >= 0) which_.push_back(k);
+  auto same_pair = [this](int i, int j) {
+    const Contact &a = contacts_[i], &b = contacts_[j];
+    return a.rod_a == b.rod_a && a.seg_a == b.seg_a && a.rod_b == b.rod_b && a.seg_b == b.seg_b;
+  };
+  std::sort(which_.begin(), which_.end(), [this](int i, int j) {
+    const Contact &a = contacts_[i], &b = contacts_[j];
+    if (a.rod_a != b.rod_a) return a.rod_a < b.rod_a;
+    if (a.seg_a != b.seg_a) return a.seg_a < b.seg_a;
+    if (a.rod_b != b.rod_b) return a.rod_b < b.rod_b;
+    if (a.seg_b != b.seg_b) return a.seg_b < b.seg_b;
+    return i < j;
+  });
+  for (size_t k = 1; k < which_.size(); ++k)
+    if (which_[k] >= kept && same_pair(which_[k - 1], which_[k])) contacts_[which_[k]].rod_a = -1;
+  contacts_.erase(std::remove_if(contacts_.begin() + kept, contacts_.end(),
+                                 [](const Contact& c) { return c.rod_a < 0; }),
+                  contacts_.end());
   stats_.contacts = static_cast<int>(contacts_.size());
   detected_v_ = velocity_;
   warm_start();
