@@ -21,7 +21,7 @@ from typing import Dict, List, Optional, Sequence
 import numpy as np
 
 from .fit_recording import FitError
-from .fit_sim import Job, markers, node_arc_lengths
+from .fit_sim import Job, markers, node_arc_lengths, statics_at_times
 
 # Material keys whose statics sensitivity the library computes (scene_statics.h).
 ANALYTIC_KEYS = ("E", "G", "E_s", "B", "C", "K_s", "kappa", "rho")
@@ -52,20 +52,9 @@ def _spline_derivative(nodes: np.ndarray, dnodes: np.ndarray, s: np.ndarray) -> 
 def statics_with_sensitivity(job: Job, names: Sequence[str]):
     """The statics job's nodes (F, N+1, 3) at job.times and their derivatives by each library
     parameter in `names` (P, F, N+1, 3), from one solve per time."""
-    import corde_sim
-
-    try:
-        sim = corde_sim.load(job.scene, overrides=dict(job.overrides))
-    except Exception as e:
-        raise FitError(str(e)) from None  # the message names the file
-    rod = int(job.rod) if str(job.rod).isdigit() else job.rod
     out, dout = [], []
-    for t in job.times:
-        try:
-            sim.statics(time=float(t))
-            d = sim.statics_sensitivity(list(names), rod=rod)
-        except Exception as e:
-            raise FitError(f"{job.scene}: statics at t = {t:g} s: {e}") from None
+    for sim, rod, d in statics_at_times(
+            job, lambda sim, rod: sim.statics_sensitivity(list(names), rod=rod)):
         out.append(np.array(sim.positions(rod)))
         dout.append([np.asarray(d[n]) for n in names])
     nodes = np.array(out)

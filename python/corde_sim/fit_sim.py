@@ -176,7 +176,9 @@ def simulate(job: Job):
     return _simulate_cli(job)
 
 
-def _statics_api(job: Job):
+def statics_at_times(job: Job, then=None):
+    """Loads job's scene and solves its statics at each of job.times, yielding (sim, rod, what
+    then(sim, rod) returned after the solve); errors become FitError naming the scene and time."""
     import corde_sim
 
     try:
@@ -184,12 +186,18 @@ def _statics_api(job: Job):
     except Exception as e:
         raise FitError(str(e)) from None  # the message names the file
     rod = int(job.rod) if str(job.rod).isdigit() else job.rod
-    out, quats = [], []
     for t in job.times:
         try:
             sim.statics(time=float(t))
+            got = then(sim, rod) if then else None
         except Exception as e:
             raise FitError(f"{job.scene}: statics at t = {t:g} s: {e}") from None
+        yield sim, rod, got
+
+
+def _statics_api(job: Job):
+    out, quats = [], []
+    for sim, rod, _ in statics_at_times(job):
         out.append(np.array(sim.positions(rod)))
         if job.want_frames:
             quats.append(np.asarray(sim.frames(rod))[:, [1, 2, 3, 0]])
