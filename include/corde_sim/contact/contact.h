@@ -209,7 +209,7 @@ class ContactSystem {
   // skin over the step); detection is then run again with the solved velocities, the impulses
   // found so far kept as the warm start.
   bool outran_detection(const World& world, double h) const;
-  void redetect(World& world, double h, const ContactResponse& response);
+  void redetect(World& world, double h);
   // Coupled response: rounds of sweeps and the rods' true response.
   void solve_rounds(World& world, double h, ContactResponse& response);
   // Coupled response: accelerated projected gradient on the Delassus operator

@@ -108,6 +108,12 @@ class Rod {
     int node = 0, segment = 0;
     double mass = 0.0;
     Vec3 offset = Vec3::Zero();
+    // Its weight under gravity g with the segment at orientation q: the potential -m g.(R d)
+    // and the body torque m d x (R^T g).
+    double potential(const Quat& q, const Vec3& g) const { return -mass * g.dot(q * offset); }
+    Vec3 body_torque(const Quat& q, const Vec3& g) const {
+      return mass * offset.cross(q.conjugate() * g);
+    }
   };
   void add_mass_offset(int node, double mass, const Vec3& offset);
   const std::vector<MassOffset>& mass_offsets() const { return mass_offsets_; }

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "contact_velocity.h"
 #include "corde_sim/contact/contact_response.h"
@@ -123,7 +125,7 @@ void ContactSystem::solve(World& world, double h, ContactResponse& response) {
     for (int pass = 0; pairs && pass < world.contact.implicit_passes; ++pass) {
       // Detection again only adds pairs (the reach grows); a pass only where it did.
       const size_t detected = contacts_.size();
-      if (outran_detection(world, h)) redetect(world, h, response);
+      if (outran_detection(world, h)) redetect(world, h);
       const bool relin = relinearise(world, h);
       if (!relin && contacts_.size() == detected) break;
       prepare_sweeps(world);
@@ -218,7 +220,7 @@ bool ContactSystem::outran_detection(const World& world, double h) const {
   return false;
 }
 
-void ContactSystem::redetect(World& world, double h, const ContactResponse&) {
+void ContactSystem::redetect(World& world, double h) {
   previous_.clear();
   for (const Contact& c : contacts_)
     if (c.pn > 0.0) previous_.push_back({pair_key(c), c.pn, c.pt, c.pr});
@@ -236,18 +238,13 @@ void ContactSystem::redetect(World& world, double h, const ContactResponse&) {
   which_.clear();
   for (int k = 0; k < static_cast<int>(contacts_.size()); ++k)
     if (contacts_[k].rod_b >= 0) which_.push_back(k);
-  auto same_pair = [this](int i, int j) {
-    const Contact &a = contacts_[i], &b = contacts_[j];
-    return a.rod_a == b.rod_a && a.seg_a == b.seg_a && a.rod_b == b.rod_b && a.seg_b == b.seg_b;
+  auto pair = [this](int k) {
+    const Contact& c = contacts_[k];
+    return std::make_tuple(c.rod_a, c.seg_a, c.rod_b, c.seg_b);
   };
-  std::sort(which_.begin(), which_.end(), [this](int i, int j) {
-    const Contact &a = contacts_[i], &b = contacts_[j];
-    if (a.rod_a != b.rod_a) return a.rod_a < b.rod_a;
-    if (a.seg_a != b.seg_a) return a.seg_a < b.seg_a;
-    if (a.rod_b != b.rod_b) return a.rod_b < b.rod_b;
-    if (a.seg_b != b.seg_b) return a.seg_b < b.seg_b;
-    return i < j;
-  });
+  auto same_pair = [&](int i, int j) { return pair(i) == pair(j); };
+  std::sort(which_.begin(), which_.end(),
+            [&](int i, int j) { return std::make_pair(pair(i), i) < std::make_pair(pair(j), j); });
   for (size_t k = 1; k < which_.size(); ++k)
     if (which_[k] >= kept && same_pair(which_[k - 1], which_[k])) contacts_[which_[k]].rod_a = -1;
   contacts_.erase(std::remove_if(contacts_.begin() + kept, contacts_.end(),

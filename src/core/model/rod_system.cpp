@@ -146,8 +146,7 @@ double RodSystem::energy() const {
     for (int i = 0; i <= n; ++i) e -= masses[i] * gravity.dot(x[i]);
     // Offset centres of mass are point masses: no stand-in rate moves them.
     if (!node_masses)
-      for (const Rod::MassOffset& m : r.mass_offsets())
-        e -= m.mass * gravity.dot(q[m.segment] * m.offset);
+      for (const Rod::MassOffset& m : r.mass_offsets()) e += m.potential(q[m.segment], gravity);
   }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads())
@@ -203,8 +202,7 @@ void RodSystem::gradient(Eigen::VectorXd* g) const {
     // mass, so no stand-in rate moves it.
     if (!node_masses)
       for (const Rod::MassOffset& m : r.mass_offsets())
-        g->segment<3>(segment_index(m.segment)) -=
-            m.mass * m.offset.cross(q[m.segment].conjugate() * gravity);
+        g->segment<3>(segment_index(m.segment)) -= m.body_torque(q[m.segment], gravity);
   }
   if (terms & kLoadTerm)
     for (const Load& l : r.loads()) {

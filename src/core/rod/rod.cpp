@@ -115,7 +115,7 @@ void Rod::add_mass_offset(int node, double mass, const Vec3& offset) {
 Vec3 Rod::mass_offset_torque(int segment, const Vec3& gravity) const {
   Vec3 tau = Vec3::Zero();
   for (const MassOffset& m : mass_offsets_)
-    if (m.segment == segment) tau += m.mass * m.offset.cross(q_[segment].conjugate() * gravity);
+    if (m.segment == segment) tau += m.body_torque(q_[segment], gravity);
   return tau;
 }
 
@@ -668,7 +668,7 @@ void Rod::forces_block(int b0, int b1, double t, const Vec3& gravity) {
   }
   for (const MassOffset& m : mass_offsets_)
     if (m.segment >= r.seg0 && m.segment < r.seg1)
-      tau_[m.segment] += m.mass * m.offset.cross(q_[m.segment].conjugate() * gravity);
+      tau_[m.segment] += m.body_torque(q_[m.segment], gravity);
   if (drag_.active()) drag_block(r.node0, r.node1);
   if (has_external_) {
     for (int i = r.node0; i < r.node1; ++i) f_[i] += ext_f_[i];
@@ -851,8 +851,7 @@ Energies Rod::energies(const Vec3& gravity) const {
     e.kinetic_translation += 0.5 * mass_[i] * v_[i].squaredNorm();
     e.gravity -= mass_[i] * gravity.dot(x_[i]);
   }
-  for (const MassOffset& m : mass_offsets_)
-    e.gravity -= m.mass * gravity.dot(q_[m.segment] * m.offset);
+  for (const MassOffset& m : mass_offsets_) e.gravity += m.potential(q_[m.segment], gravity);
   for (int s = 0; s < n; ++s) {
     const Vec3 dr = x_[s + 1] - x_[s];
     e.kinetic_rotation += 0.5 * w_[s].dot(inertia_[s].cwiseProduct(w_[s]));

@@ -220,8 +220,7 @@ void StepGuard::add_step_work(const World& world, double h) {
       double du = 0.0;
       for (int i = 0; i < rod.num_nodes(); ++i)
         du += rod.node_masses()[i] * dg.dot(rod.positions()[i]);
-      for (const Rod::MassOffset& m : rod.mass_offsets())
-        du += m.mass * dg.dot(rod.orientations()[m.segment] * m.offset);
+      for (const Rod::MassOffset& m : rod.mass_offsets()) du -= m.potential(q[m.segment], dg);
       w += std::abs(du);
     }
     const auto& om = rod.angular_velocities();
